@@ -1,0 +1,48 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "sdf_tracker/core/camera.h"
+#include "sdf_tracker/core/depth_image.h"
+#include "sdf_tracker/core/surface.h"
+#include "sdf_tracker/core/tsdf_volume.h"
+
+/// File input and output of the core. Every function throws std::runtime_error naming the file
+/// and what is wrong with it; writers write a temporary file and rename it into place, so a
+/// failed write never leaves a half-written file under the final name.
+namespace sdf_tracker::io {
+
+/// A 16-bit single-channel PNG; metres = value / depth_factor, 0 = no measurement.
+DepthImage readDepthPng(const std::string& path, double depth_factor);
+void writeDepthPng(const std::string& path, const DepthImage& depth, double depth_factor);
+
+/// Binary little-endian PLY with normals.
+void writePly(const std::string& path, const SurfaceCloud& cloud);
+void writePly(const std::string& path, const TriangleMesh& mesh);
+/// Wavefront OBJ, as the reference release's triangles.obj.
+void writeObj(const std::string& path, const TriangleMesh& mesh);
+/// Reads a PLY written by writePly(mesh) (binary or ASCII vertices x y z and triangle faces).
+TriangleMesh readPlyMesh(const std::string& path);
+
+/// VTK XML ImageData (.vti) with point arrays "distance" and "weight", which ParaView opens.
+void writeVti(const std::string& path, const TsdfVolume& volume);
+/// Validates dimensions, spacing, origin, array sizes and values before building the volume.
+TsdfVolume readVti(const std::string& path);
+
+/// A timestamped camera-to-world pose.
+struct StampedPose {
+  double timestamp_s;
+  Eigen::Isometry3d T_W_C;
+};
+
+/// TUM trajectory format: "timestamp tx ty tz qx qy qz qw" per line, '#' comments.
+void writeTrajectory(const std::string& path, const std::vector<StampedPose>& poses);
+std::vector<StampedPose> readTrajectory(const std::string& path);
+
+/// Writes text atomically (temporary file + rename).
+void writeTextFile(const std::string& path, const std::string& text);
+
+}  // namespace sdf_tracker::io

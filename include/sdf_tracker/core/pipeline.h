@@ -1,0 +1,95 @@
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "sdf_tracker/core/camera.h"
+#include "sdf_tracker/core/depth_image.h"
+#include "sdf_tracker/core/integrator.h"
+#include "sdf_tracker/core/raycaster.h"
+#include "sdf_tracker/core/tracker.h"
+#include "sdf_tracker/core/tsdf_volume.h"
+
+namespace sdf_tracker {
+
+/// Everything the tracking-and-mapping loop needs, one aggregate per component.
+struct PipelineConfig {
+  VolumeConfig volume;
+  IntegratorConfig integrator;
+  TrackerConfig tracker;
+  RaycastConfig raycast;
+  /// Depths outside [min_depth_m, max_depth_m] are treated as no measurement (the reference
+  /// release rejects depth under 0.4 m).
+  double min_depth_m = 0.4;
+  double max_depth_m = 8.0;
+  /// Where the first camera sits in the grid, as a fraction of the grid's extent along each axis
+  /// (world axes = the first camera's axes). (0.5, 0.5, 0) puts it at the centre of the grid's
+  /// near face, looking in along +z.
+  Eigen::Vector3d initial_camera_in_grid = Eigen::Vector3d(0.5, 0.5, 0.0);
+  /// Fuse a tracked frame only when the camera moved at least this much (|xi| of the motion
+  /// since the last fused frame, metres and radians); 0 fuses every frame.
+  double min_pose_change_to_fuse = 0.0;
+  /// After this many consecutive tracking failures the map is cleared and rebuilt from the next
+  /// frame at the held pose; 0 never resets.
+  int reset_after_failures = 0;
+
+  std::vector<std::string> validate() const;
+};
+
+/// What happened to one frame.
+struct FrameReport {
+  TrackResult track;
+  bool initialised_map = false;  ///< the frame started (or restarted) the map
+  bool fused = false;
+  bool reset = false;  ///< the map was cleared before this frame after repeated failures
+  double tracking_ms = 0.0;
+  double fusion_ms = 0.0;
+};
+
+/// The on-line loop: track each frame against the map, then fuse it at the tracked pose. Owns the
+/// volume and the current pose; no I/O, no ROS. Not thread safe: one caller at a time.
+class SdfPipeline {
+ public:
+  /// Throws std::invalid_argument naming every violation of the config.
+  explicit SdfPipeline(const PipelineConfig& config);
+
+  const PipelineConfig& config() const { return config_; }
+
+  /// Tracks and fuses one depth image (metres). Bad input yields a report with kBadInput; the
+  /// map and pose are then untouched. The camera must match the image size.
+  FrameReport processFrame(const DepthImage& depth, const PinholeCamera& camera);
+
+  /// Camera to world at the last accepted frame.
+  const Eigen::Isometry3d& pose() const { return T_W_C_; }
+  const TsdfVolume& volume() const { return *volume_; }
+
+  /// Clears the map and puts the camera back at the start pose.
+  void reset();
+  /// Replaces the map (e.g. a loaded .vti); the next frame is tracked against it from the start pose.
+  void setVolume(TsdfVolume volume);
+
+  /// Live-changeable settings (dynamic reconfigure): everything but the grid geometry. Throws
+  /// std::invalid_argument (leaving the pipeline unchanged) when the candidate is invalid or
+  /// changes the grid.
+  void updateConfig(const PipelineConfig& candidate);
+
+  /// The start pose: identity, with the volume placed around it per initial_camera_in_grid.
+  static Eigen::Vector3d volumeOriginFor(const PipelineConfig& config);
+
+ private:
+  DepthImage filterDepth(const DepthImage& depth) const;
+
+  PipelineConfig config_;
+  std::unique_ptr<TsdfVolume> volume_;
+  std::unique_ptr<Integrator> integrator_;
+  std::unique_ptr<Tracker> tracker_;
+  Eigen::Isometry3d T_W_C_ = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
+  bool map_initialised_ = false;
+  int consecutive_failures_ = 0;
+};
+
+}  // namespace sdf_tracker

@@ -1,0 +1,16 @@
+#pragma once
+
+#include <Eigen/Geometry>
+
+namespace sdf_tracker {
+
+/// Twist ordered as in the paper, eq. (5): (omega1 omega2 omega3 v1 v2 v3).
+using Twist = Eigen::Matrix<double, 6, 1>;
+
+/// exp: se(3) -> SE(3), closed form (Rodrigues for rotation, V matrix for translation).
+Eigen::Isometry3d expSe3(const Twist& xi);
+
+/// Rotation angle [rad] of a rigid transform.
+double rotationAngle(const Eigen::Isometry3d& T);
+
+}  // namespace sdf_tracker

@@ -1,0 +1,91 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "sdf_tracker/core/camera.h"
+#include "sdf_tracker/core/depth_image.h"
+#include "sdf_tracker/core/sensor_model.h"
+#include "sdf_tracker/core/tsdf_volume.h"
+
+namespace sdf_tracker {
+
+/// One coarse-to-fine level: use every `stride`-th pixel in u and v, for at most `max_iterations`.
+struct PyramidLevel {
+  int stride;
+  int max_iterations;
+};
+
+struct TrackerConfig {
+  /// Coarse-to-fine schedule as data: the paper's 4/2/1 x 12/6/2 by default.
+  std::vector<PyramidLevel> levels = {{4, 12}, {2, 6}, {1, 2}};
+  /// Huber threshold k = huber_coefficient * Dmax (RobustStatisticCoefficient).
+  double huber_coefficient = 0.02;
+  /// Weight each point by the inverse variance of its depth (noise model) on top of Huber, and
+  /// widen its Huber threshold by the same noise ratio.
+  bool sensor_weights = true;
+  DepthNoiseModel noise;
+  /// alpha = regularization * (iteration within the level, from 1), eq. (21).
+  double regularization = 0.01;
+  /// A level ends early when |delta xi| falls below this (ConvergenceCondition).
+  double convergence_threshold = 1e-4;
+  /// Fewer valid points than this at any iteration: kTooFewPoints.
+  int min_valid_points = 200;
+  /// Smallest/largest eigenvalue of the scaled normal equations below this: kDegenerate.
+  double min_inverse_condition = 1e-4;
+  /// A final step |delta xi| larger than this: kNotConverged.
+  double max_final_step = 5e-3;
+  /// Motion from the guess beyond either limit: kDiverged (larger than a hand-held camera moves
+  /// between two frames at 30 Hz, and beyond the truncation band's basin of convergence).
+  double max_translation_m = 0.25;
+  double max_rotation_rad = 0.5;
+
+  std::vector<std::string> validate() const;
+};
+
+enum class TrackStatus {
+  kOk,
+  kNotConverged,  ///< iterations ran out with the pose still moving.
+  kTooFewPoints,  ///< too few points landed in observed parts of the field.
+  kDegenerate,    ///< the geometry does not constrain all six degrees of freedom (e.g. one plane).
+  kDiverged,      ///< the solution ran away or became non-finite.
+  kBadInput,      ///< the depth image is empty, of the wrong size, or holds no measurement.
+};
+
+const char* toString(TrackStatus status);
+
+struct TrackResult {
+  TrackStatus status = TrackStatus::kBadInput;
+  /// The estimate (camera to world). For kOk and kNotConverged it is the optimised pose; for any
+  /// other status it is the guess, unchanged.
+  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+  std::vector<int> iterations_per_level;
+  double rms_residual_m = 0.0;  ///< RMS of D at the valid points of the last iteration.
+  int valid_points = 0;         ///< points used in the last iteration.
+  double inverse_condition = 0.0;
+  double final_step = 0.0;  ///< |delta xi| of the last iteration.
+  std::string message;      ///< why, in words, when status != kOk.
+
+  bool ok() const { return status == TrackStatus::kOk; }
+};
+
+/// Registers a depth image directly against the TSDF (Section III): Gauss-Newton on the sum of
+/// squared field values at the transformed points, Huber IRLS, growing Tikhonov regularisation,
+/// coarse-to-fine pixel strides. Stateless apart from its config; thread safe.
+class Tracker {
+ public:
+  /// Throws std::invalid_argument naming every violation of the config.
+  explicit Tracker(const TrackerConfig& config);
+
+  const TrackerConfig& config() const { return config_; }
+
+  TrackResult track(const DepthImage& depth, const PinholeCamera& camera, const TsdfVolume& volume,
+                    const Eigen::Isometry3d& T_W_C_guess) const;
+
+ private:
+  TrackerConfig config_;
+};
+
+}  // namespace sdf_tracker

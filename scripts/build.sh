@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Builds the package in Release through catkin, in a workspace under build/ whose src/ links back
+# to this repository (the repository root is the package). Prints where the binaries are.
+#   scripts/build.sh [extra catkin_make arguments]
+set -euo pipefail
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+ws="$repo/build/ws"
+mkdir -p "$ws/src"
+[ -L "$ws/src/sdf_tracker" ] || ln -sfn "$repo" "$ws/src/sdf_tracker"
+# catkin's Python helpers live in Debian's interpreter, not in a pyenv one that may be first on PATH.
+export PATH="/usr/bin:$PATH"
+set +u
+# shellcheck disable=SC1091
+[ -f /opt/ros/noetic/setup.bash ] && source /opt/ros/noetic/setup.bash
+set -u
+cd "$ws"
+catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$(nproc)" "$@" \
+  > "$repo/build/catkin_make.log" 2>&1 || { tail -n 60 "$repo/build/catkin_make.log"; echo "build failed (full log: build/catkin_make.log)"; exit 1; }
+grep -E "warning:" "$repo/build/catkin_make.log" | sort -u | head -20 || true
+echo "built: $ws/devel/lib/sdf_tracker/"

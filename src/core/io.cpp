@@ -1,0 +1,371 @@
+#include "sdf_tracker/core/io.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+#include <opencv2/imgcodecs.hpp>
+
+namespace sdf_tracker::io {
+
+namespace {
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw std::runtime_error(path + ": " + what);
+}
+
+/// An output file that appears under its final name only when commit() succeeds.
+class AtomicOutput {
+ public:
+  explicit AtomicOutput(const std::string& path)
+      : path_(path), temporary_(path + ".tmp"), out_(temporary_, std::ios::binary | std::ios::trunc) {
+    if (!out_) fail(path_, std::string("cannot open for writing: ") + std::strerror(errno));
+  }
+  ~AtomicOutput() {
+    if (!committed_) std::remove(temporary_.c_str());
+  }
+  AtomicOutput(const AtomicOutput&) = delete;
+  AtomicOutput& operator=(const AtomicOutput&) = delete;
+
+  std::ofstream& stream() { return out_; }
+
+  void commit() {
+    out_.close();
+    if (!out_) fail(path_, "write failed (disk full?)");
+    if (std::rename(temporary_.c_str(), path_.c_str()) != 0) {
+      fail(path_, std::string("cannot move the written file into place: ") + std::strerror(errno));
+    }
+    committed_ = true;
+  }
+
+ private:
+  std::string path_;
+  std::string temporary_;
+  std::ofstream out_;
+  bool committed_ = false;
+};
+
+template <typename T>
+void writeBinary(std::ostream& out, const T& value) {
+  out.write(reinterpret_cast<const char*>(&value), sizeof(T));
+}
+
+void writeVector3(std::ostream& out, const Eigen::Vector3f& v) {
+  writeBinary(out, v.x());
+  writeBinary(out, v.y());
+  writeBinary(out, v.z());
+}
+
+std::string readWholeFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  return buffer.str();
+}
+
+/// The value of attribute `name` in the first element that has it, e.g. Spacing="0.1 0.1 0.1".
+std::string xmlAttribute(const std::string& text, const std::string& name, const std::string& path) {
+  const std::string key = " " + name + "=\"";
+  const size_t start = text.find(key);
+  if (start == std::string::npos) fail(path, "missing attribute " + name);
+  const size_t value_start = start + key.size();
+  const size_t end = text.find('"', value_start);
+  if (end == std::string::npos) fail(path, "unterminated attribute " + name);
+  return text.substr(value_start, end - value_start);
+}
+
+template <typename T, int N>
+Eigen::Matrix<T, N, 1> parseNumbers(const std::string& text, const std::string& what, const std::string& path) {
+  std::istringstream in(text);
+  Eigen::Matrix<T, N, 1> values;
+  for (int i = 0; i < N; ++i) {
+    if (!(in >> values[i])) fail(path, what + " must hold " + std::to_string(N) + " numbers (got \"" + text + "\")");
+  }
+  return values;
+}
+
+}  // namespace
+
+DepthImage readDepthPng(const std::string& path, double depth_factor) {
+  if (!(depth_factor > 0.0)) fail(path, "depth factor must be > 0 (got " + std::to_string(depth_factor) + ")");
+  const cv::Mat raw = cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
+  if (raw.empty()) fail(path, "cannot read as an image (missing or corrupt)");
+  if (raw.type() != CV_16UC1) {
+    fail(path, "depth must be a 16-bit single-channel PNG (got OpenCV type " + std::to_string(raw.type()) + ")");
+  }
+  return DepthImage::fromRaw16(raw.ptr<uint16_t>(), raw.cols, raw.rows, depth_factor);
+}
+
+void writeDepthPng(const std::string& path, const DepthImage& depth, double depth_factor) {
+  cv::Mat raw(depth.height(), depth.width(), CV_16UC1);
+  for (int v = 0; v < depth.height(); ++v) {
+    for (int u = 0; u < depth.width(); ++u) {
+      const float z = depth.at(u, v);
+      const double value = DepthImage::isMeasurement(z) ? std::round(z * depth_factor) : 0.0;
+      raw.at<uint16_t>(v, u) = static_cast<uint16_t>(value > 65535.0 ? 0.0 : value);
+    }
+  }
+  std::vector<uchar> png;
+  if (!cv::imencode(".png", raw, png)) fail(path, "PNG encoding failed");
+  AtomicOutput out(path);
+  out.stream().write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+  out.commit();
+}
+
+void writePly(const std::string& path, const SurfaceCloud& cloud) {
+  AtomicOutput out(path);
+  std::ostream& s = out.stream();
+  s << "ply\nformat binary_little_endian 1.0\ncomment sdf_tracker surface cloud (world frame, metres)\n"
+    << "element vertex " << cloud.points_W.size() << "\n"
+    << "property float x\nproperty float y\nproperty float z\n"
+    << "property float nx\nproperty float ny\nproperty float nz\nend_header\n";
+  for (size_t i = 0; i < cloud.points_W.size(); ++i) {
+    writeVector3(s, cloud.points_W[i]);
+    writeVector3(s, cloud.normals_W[i]);
+  }
+  out.commit();
+}
+
+void writePly(const std::string& path, const TriangleMesh& mesh) {
+  AtomicOutput out(path);
+  std::ostream& s = out.stream();
+  s << "ply\nformat binary_little_endian 1.0\ncomment sdf_tracker mesh (world frame, metres)\n"
+    << "element vertex " << mesh.vertices_W.size() << "\n"
+    << "property float x\nproperty float y\nproperty float z\n"
+    << "property float nx\nproperty float ny\nproperty float nz\n"
+    << "element face " << mesh.triangles.size() << "\n"
+    << "property list uchar int vertex_indices\nend_header\n";
+  for (size_t i = 0; i < mesh.vertices_W.size(); ++i) {
+    writeVector3(s, mesh.vertices_W[i]);
+    writeVector3(s, mesh.normals_W[i]);
+  }
+  for (const auto& t : mesh.triangles) {
+    writeBinary(s, static_cast<uint8_t>(3));
+    for (int m = 0; m < 3; ++m) writeBinary(s, static_cast<int32_t>(t[m]));
+  }
+  out.commit();
+}
+
+void writeObj(const std::string& path, const TriangleMesh& mesh) {
+  AtomicOutput out(path);
+  std::ostream& s = out.stream();
+  s << "# sdf_tracker mesh (world frame, metres)\n" << std::setprecision(7);
+  for (const auto& v : mesh.vertices_W) s << "v " << v.x() << ' ' << v.y() << ' ' << v.z() << '\n';
+  for (const auto& n : mesh.normals_W) s << "vn " << n.x() << ' ' << n.y() << ' ' << n.z() << '\n';
+  for (const auto& t : mesh.triangles) {
+    s << "f";
+    for (int m = 0; m < 3; ++m) s << ' ' << t[m] + 1 << "//" << t[m] + 1;
+    s << '\n';
+  }
+  out.commit();
+}
+
+TriangleMesh readPlyMesh(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
+  std::string line;
+  if (!std::getline(in, line) || line != "ply") fail(path, "not a PLY file (first line is not \"ply\")");
+  bool binary = false;
+  size_t vertex_count = 0, face_count = 0;
+  int vertex_floats = 0;
+  std::string element;
+  while (std::getline(in, line) && line != "end_header") {
+    std::istringstream words(line);
+    std::string keyword;
+    words >> keyword;
+    if (keyword == "format") {
+      std::string format;
+      words >> format;
+      if (format != "binary_little_endian" && format != "ascii") fail(path, "unsupported PLY format " + format);
+      binary = format == "binary_little_endian";
+    } else if (keyword == "element") {
+      size_t count = 0;
+      words >> element >> count;
+      if (element == "vertex") vertex_count = count;
+      if (element == "face") face_count = count;
+    } else if (keyword == "property" && element == "vertex") {
+      std::string type;
+      words >> type;
+      if (type != "float") fail(path, "only float vertex properties are supported (got " + type + ")");
+      ++vertex_floats;
+    }
+  }
+  if (line != "end_header") fail(path, "PLY header has no end_header");
+  if (vertex_floats < 3) fail(path, "PLY vertices need x, y and z");
+  TriangleMesh mesh;
+  mesh.vertices_W.resize(vertex_count);
+  std::vector<float> values(vertex_floats);
+  for (size_t i = 0; i < vertex_count; ++i) {
+    for (auto& value : values) {
+      if (binary) in.read(reinterpret_cast<char*>(&value), sizeof(float));
+      else in >> value;
+    }
+    if (!in) fail(path, "PLY ends inside vertex " + std::to_string(i) + " of " + std::to_string(vertex_count));
+    mesh.vertices_W[i] = Eigen::Vector3f(values[0], values[1], values[2]);
+  }
+  mesh.triangles.resize(face_count);
+  for (size_t i = 0; i < face_count; ++i) {
+    int corners = 0;
+    Eigen::Vector3i t;
+    if (binary) {
+      uint8_t n = 0;
+      in.read(reinterpret_cast<char*>(&n), 1);
+      corners = n;
+      if (corners == 3) in.read(reinterpret_cast<char*>(t.data()), 3 * sizeof(int32_t));
+    } else {
+      in >> corners;
+      if (corners == 3) in >> t[0] >> t[1] >> t[2];
+    }
+    if (!in) fail(path, "PLY ends inside face " + std::to_string(i) + " of " + std::to_string(face_count));
+    if (corners != 3) fail(path, "face " + std::to_string(i) + " has " + std::to_string(corners) + " corners, not 3");
+    if (t.minCoeff() < 0 || t.maxCoeff() >= static_cast<int>(vertex_count)) {
+      fail(path, "face " + std::to_string(i) + " indexes a vertex that does not exist");
+    }
+    mesh.triangles[i] = t;
+  }
+  return mesh;
+}
+
+void writeVti(const std::string& path, const TsdfVolume& volume) {
+  const Eigen::Vector3i d = volume.dims();
+  const Eigen::Vector3d o = volume.config().origin_W;
+  const uint64_t array_bytes = volume.voxelCount() * sizeof(float);
+  AtomicOutput out(path);
+  std::ostream& s = out.stream();
+  s << std::setprecision(17);
+  s << "<?xml version=\"1.0\"?>\n"
+    << "<VTKFile type=\"ImageData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+    << "  <ImageData WholeExtent=\"0 " << d.x() - 1 << " 0 " << d.y() - 1 << " 0 " << d.z() - 1 << "\" Origin=\""
+    << o.x() << ' ' << o.y() << ' ' << o.z() << "\" Spacing=\"" << volume.config().voxel_size_m << ' '
+    << volume.config().voxel_size_m << ' ' << volume.config().voxel_size_m << "\">\n"
+    << "    <FieldData>\n"
+    << "      <DataArray type=\"Float64\" Name=\"positive_truncation_m\" NumberOfTuples=\"1\" format=\"ascii\">"
+    << volume.config().positive_truncation_m << "</DataArray>\n"
+    << "    </FieldData>\n"
+    << "    <Piece Extent=\"0 " << d.x() - 1 << " 0 " << d.y() - 1 << " 0 " << d.z() - 1 << "\">\n"
+    << "      <PointData Scalars=\"distance\">\n"
+    << "        <DataArray type=\"Float32\" Name=\"distance\" format=\"appended\" offset=\"0\"/>\n"
+    << "        <DataArray type=\"Float32\" Name=\"weight\" format=\"appended\" offset=\""
+    << array_bytes + sizeof(uint64_t) << "\"/>\n"
+    << "      </PointData>\n    </Piece>\n  </ImageData>\n  <AppendedData encoding=\"raw\">\n   _";
+  std::vector<float> buffer(volume.voxelCount());
+  for (int field = 0; field < 2; ++field) {
+    for (size_t i = 0; i < buffer.size(); ++i) {
+      buffer[i] = field == 0 ? volume.data()[i].distance_m : volume.data()[i].weight;
+    }
+    writeBinary(s, array_bytes);
+    s.write(reinterpret_cast<const char*>(buffer.data()), static_cast<std::streamsize>(array_bytes));
+  }
+  s << "\n  </AppendedData>\n</VTKFile>\n";
+  out.commit();
+}
+
+TsdfVolume readVti(const std::string& path) {
+  const std::string text = readWholeFile(path);
+  if (text.find("<VTKFile type=\"ImageData\"") == std::string::npos) fail(path, "not a VTK ImageData (.vti) file");
+  const size_t data_marker = text.find("<AppendedData encoding=\"raw\">");
+  if (data_marker == std::string::npos) fail(path, "no raw AppendedData section");
+  const std::string header = text.substr(0, data_marker);
+  if (xmlAttribute(header, "header_type", path) != "UInt64") fail(path, "header_type must be UInt64");
+
+  const auto extent = parseNumbers<int, 6>(xmlAttribute(header, "WholeExtent", path), "WholeExtent", path);
+  const auto spacing = parseNumbers<double, 3>(xmlAttribute(header, "Spacing", path), "Spacing", path);
+  VolumeConfig config;
+  config.dims = Eigen::Vector3i(extent[1] - extent[0] + 1, extent[3] - extent[2] + 1, extent[5] - extent[4] + 1);
+  config.origin_W = parseNumbers<double, 3>(xmlAttribute(header, "Origin", path), "Origin", path);
+  config.voxel_size_m = spacing.x();
+  if (std::fabs(spacing.y() - spacing.x()) > 1e-9 || std::fabs(spacing.z() - spacing.x()) > 1e-9) {
+    fail(path, "voxels must be cubic (Spacing " + xmlAttribute(header, "Spacing", path) + ")");
+  }
+  const std::string truncation_key = "Name=\"positive_truncation_m\"";
+  const size_t truncation_at = header.find(truncation_key);
+  if (truncation_at == std::string::npos) fail(path, "missing field positive_truncation_m");
+  config.positive_truncation_m =
+      parseNumbers<double, 1>(header.substr(header.find('>', truncation_at) + 1), "positive_truncation_m", path)[0];
+  const auto violations = config.validate();
+  if (!violations.empty()) fail(path, "invalid volume geometry: " + violations.front());
+
+  TsdfVolume volume(config);
+  const uint64_t array_bytes = volume.voxelCount() * sizeof(float);
+  size_t cursor = text.find('_', data_marker);
+  if (cursor == std::string::npos) fail(path, "AppendedData has no '_' marker");
+  ++cursor;
+  for (int field = 0; field < 2; ++field) {
+    uint64_t bytes = 0;
+    if (cursor + sizeof(bytes) > text.size()) fail(path, "file is truncated");
+    std::memcpy(&bytes, text.data() + cursor, sizeof(bytes));
+    cursor += sizeof(bytes);
+    if (bytes != array_bytes) {
+      fail(path, "array " + std::to_string(field) + " holds " + std::to_string(bytes) + " bytes, expected " +
+                     std::to_string(array_bytes));
+    }
+    if (cursor + bytes > text.size()) fail(path, "file is truncated inside the voxel data");
+    const float* values = reinterpret_cast<const float*>(text.data() + cursor);
+    for (size_t i = 0; i < volume.voxelCount(); ++i) {
+      float value;
+      std::memcpy(&value, values + i, sizeof(float));
+      if (!std::isfinite(value) || (field == 1 && value < 0.0f)) {
+        fail(path, std::string(field == 0 ? "distance" : "weight") + " of voxel " + std::to_string(i) +
+                       " is invalid (" + std::to_string(value) + ")");
+      }
+      (field == 0 ? volume.data()[i].distance_m : volume.data()[i].weight) = value;
+    }
+    cursor += bytes;
+  }
+  return volume;
+}
+
+void writeTrajectory(const std::string& path, const std::vector<StampedPose>& poses) {
+  std::ostringstream s;
+  s << "# timestamp tx ty tz qx qy qz qw (camera to world)\n" << std::fixed;
+  for (const auto& pose : poses) {
+    const Eigen::Quaterniond q(pose.T_W_C.linear());
+    const Eigen::Vector3d t = pose.T_W_C.translation();
+    s << std::setprecision(6) << pose.timestamp_s << std::setprecision(7) << ' ' << t.x() << ' ' << t.y() << ' '
+      << t.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
+  }
+  writeTextFile(path, s.str());
+}
+
+std::vector<StampedPose> readTrajectory(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
+  std::vector<StampedPose> poses;
+  std::string line;
+  int line_number = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream words(line);
+    double v[8];
+    for (double& value : v) {
+      if (!(words >> value) || !std::isfinite(value)) {
+        fail(path, "line " + std::to_string(line_number) + " is not \"timestamp tx ty tz qx qy qz qw\": " + line);
+      }
+    }
+    const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
+    if (std::fabs(q.norm() - 1.0) > 1e-2) {
+      fail(path, "line " + std::to_string(line_number) + " has a quaternion of norm " + std::to_string(q.norm()));
+    }
+    StampedPose pose{v[0], Eigen::Isometry3d::Identity()};
+    pose.T_W_C.linear() = q.normalized().toRotationMatrix();
+    pose.T_W_C.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
+    poses.push_back(pose);
+  }
+  return poses;
+}
+
+void writeTextFile(const std::string& path, const std::string& text) {
+  AtomicOutput out(path);
+  out.stream() << text;
+  out.commit();
+}
+
+}  // namespace sdf_tracker::io

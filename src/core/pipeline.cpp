@@ -1,0 +1,166 @@
+#include "sdf_tracker/core/pipeline.h"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "sdf_tracker/core/se3.h"
+#include "sdf_tracker/core/validation.h"
+
+namespace sdf_tracker {
+
+namespace {
+
+double millisecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// The grid's geometry with its origin placed for the start pose.
+VolumeConfig placedVolume(const PipelineConfig& config) {
+  VolumeConfig volume = config.volume;
+  volume.origin_W = SdfPipeline::volumeOriginFor(config);
+  return volume;
+}
+
+}  // namespace
+
+std::vector<std::string> PipelineConfig::validate() const {
+  Violations v;
+  v.merge("volume.", volume.validate());
+  v.merge("integrator.", integrator.validate());
+  v.merge("tracker.", tracker.validate());
+  v.merge("raycast.", raycast.validate());
+  v.requireNonNegative("min_depth_m", min_depth_m);
+  v.require(max_depth_m > min_depth_m, "max_depth_m must be > min_depth_m (got " + std::to_string(max_depth_m) +
+                                           " <= " + std::to_string(min_depth_m) + ")");
+  for (int axis = 0; axis < 3; ++axis) {
+    v.requireInRange("initial_camera_in_grid[" + std::to_string(axis) + "]", initial_camera_in_grid[axis], -1.0, 2.0);
+  }
+  v.requireNonNegative("min_pose_change_to_fuse", min_pose_change_to_fuse);
+  v.requireNonNegative("reset_after_failures", reset_after_failures);
+  if (volume.positive_truncation_m > 0.0 && integrator.negative_truncation_m < 0.0) {
+    // The tracker needs samples on both sides of the surface: at least one voxel each way.
+    std::ostringstream s;
+    s << "the truncation band (" << integrator.negative_truncation_m << " .. " << volume.positive_truncation_m
+      << " m) must span at least one voxel (" << volume.voxel_size_m << " m) on each side";
+    v.require(volume.positive_truncation_m >= volume.voxel_size_m &&
+                  -integrator.negative_truncation_m >= volume.voxel_size_m,
+              s.str());
+  }
+  return v.list();
+}
+
+Eigen::Vector3d SdfPipeline::volumeOriginFor(const PipelineConfig& config) {
+  return -config.initial_camera_in_grid.cwiseProduct(config.volume.extent_m());
+}
+
+SdfPipeline::SdfPipeline(const PipelineConfig& config) : config_(config) {
+  throwIfInvalid("pipeline config", config.validate());
+  volume_ = std::make_unique<TsdfVolume>(placedVolume(config));
+  integrator_ = std::make_unique<Integrator>(config.integrator);
+  tracker_ = std::make_unique<Tracker>(config.tracker);
+}
+
+void SdfPipeline::reset() {
+  volume_->clear();
+  T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
+  map_initialised_ = false;
+  consecutive_failures_ = 0;
+}
+
+void SdfPipeline::setVolume(TsdfVolume volume) {
+  volume_ = std::make_unique<TsdfVolume>(std::move(volume));
+  config_.volume.dims = volume_->dims();
+  config_.volume.voxel_size_m = volume_->config().voxel_size_m;
+  config_.volume.positive_truncation_m = volume_->config().positive_truncation_m;
+  T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
+  map_initialised_ = true;
+  consecutive_failures_ = 0;
+}
+
+void SdfPipeline::updateConfig(const PipelineConfig& candidate) {
+  throwIfInvalid("pipeline config", candidate.validate());
+  const VolumeConfig& a = candidate.volume;
+  const VolumeConfig& b = config_.volume;
+  if (a.dims != b.dims || a.voxel_size_m != b.voxel_size_m || a.positive_truncation_m != b.positive_truncation_m ||
+      candidate.initial_camera_in_grid != config_.initial_camera_in_grid) {
+    throw std::invalid_argument("the grid (size, cell size, positive truncation, placement) cannot change live");
+  }
+  integrator_ = std::make_unique<Integrator>(candidate.integrator);
+  tracker_ = std::make_unique<Tracker>(candidate.tracker);
+  config_ = candidate;
+}
+
+DepthImage SdfPipeline::filterDepth(const DepthImage& depth) const {
+  DepthImage filtered = depth;
+  const float lo = static_cast<float>(config_.min_depth_m), hi = static_cast<float>(config_.max_depth_m);
+  float* z = filtered.data();
+  const size_t n = static_cast<size_t>(filtered.width()) * filtered.height();
+  for (size_t i = 0; i < n; ++i) {
+    if (!(z[i] >= lo && z[i] <= hi)) z[i] = 0.0f;  // NaN fails both comparisons
+  }
+  return filtered;
+}
+
+FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCamera& camera) {
+  FrameReport report;
+  report.track.T_W_C = T_W_C_;
+  if (depth.width() != camera.width || depth.height() != camera.height || depth.empty()) {
+    std::ostringstream msg;
+    msg << "depth image is " << depth.width() << "x" << depth.height() << " but the camera is " << camera.width
+        << "x" << camera.height;
+    report.track.status = TrackStatus::kBadInput;
+    report.track.message = msg.str();
+    return report;
+  }
+  const DepthImage filtered = filterDepth(depth);
+  if (filtered.countMeasurements() == 0) {
+    report.track.status = TrackStatus::kBadInput;
+    report.track.message = "no pixel holds a depth within [" + std::to_string(config_.min_depth_m) + ", " +
+                           std::to_string(config_.max_depth_m) + "] m";
+    return report;
+  }
+
+  if (config_.reset_after_failures > 0 && consecutive_failures_ >= config_.reset_after_failures) {
+    const Eigen::Isometry3d held = T_W_C_;
+    volume_->clear();
+    map_initialised_ = false;
+    consecutive_failures_ = 0;
+    T_W_C_ = T_W_C_last_fused_ = held;
+    report.reset = true;
+  }
+
+  if (!map_initialised_) {
+    report.track.status = TrackStatus::kOk;
+    report.track.T_W_C = T_W_C_;
+    report.track.message = "first frame: map initialised at the start pose";
+    report.initialised_map = true;
+  } else {
+    const auto start = std::chrono::steady_clock::now();
+    report.track = tracker_->track(filtered, camera, *volume_, T_W_C_);
+    report.tracking_ms = millisecondsSince(start);
+    const bool pose_usable =
+        report.track.status == TrackStatus::kOk || report.track.status == TrackStatus::kNotConverged;
+    if (pose_usable) T_W_C_ = report.track.T_W_C;
+    if (!report.track.ok()) {
+      ++consecutive_failures_;
+      return report;  // never fuse on a failed frame
+    }
+    consecutive_failures_ = 0;
+  }
+
+  const Eigen::Isometry3d motion = T_W_C_last_fused_.inverse() * T_W_C_;
+  const double change = std::hypot(motion.translation().norm(), rotationAngle(motion));
+  if (report.initialised_map || change >= config_.min_pose_change_to_fuse) {
+    const auto start = std::chrono::steady_clock::now();
+    integrator_->integrate(filtered, camera, T_W_C_, volume_.get());
+    report.fusion_ms = millisecondsSince(start);
+    report.fused = true;
+    T_W_C_last_fused_ = T_W_C_;
+    map_initialised_ = true;
+  }
+  return report;
+}
+
+}  // namespace sdf_tracker

@@ -1,0 +1,227 @@
+#include "sdf_tracker/core/tracker.h"
+
+#include <cmath>
+#include <sstream>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include "sdf_tracker/core/se3.h"
+#include "sdf_tracker/core/validation.h"
+
+namespace sdf_tracker {
+
+namespace {
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+/// The IRLS normal equations of one iteration, summed over points in double precision.
+struct NormalEquations {
+  Matrix6d H = Matrix6d::Zero();
+  Vector6d g = Vector6d::Zero();
+  double squared_residual_sum = 0.0;
+  double squared_lever_sum = 0.0;  ///< sum |p - c|^2, the scale of the rotational columns.
+  int count = 0;
+
+  NormalEquations& operator+=(const NormalEquations& other) {
+    H += other.H;
+    g += other.g;
+    squared_residual_sum += other.squared_residual_sum;
+    squared_lever_sum += other.squared_lever_sum;
+    count += other.count;
+    return *this;
+  }
+};
+
+#pragma omp declare reduction(sumEquations : NormalEquations : omp_out += omp_in) \
+    initializer(omp_priv = NormalEquations())
+
+/// Huber weight, eq. (20).
+inline float huberWeight(float residual, float k) {
+  const float a = std::fabs(residual);
+  return a <= k ? 1.0f : k / a;
+}
+
+/// Back-projects every stride-th pixel that holds a measurement.
+std::vector<Eigen::Vector3f> backProjectSubsampled(const DepthImage& depth, const PinholeCamera& camera,
+                                                   int stride) {
+  std::vector<Eigen::Vector3f> points_C;
+  points_C.reserve(static_cast<size_t>(depth.width() / stride + 1) * (depth.height() / stride + 1));
+  for (int v = 0; v < depth.height(); v += stride) {
+    for (int u = 0; u < depth.width(); u += stride) {
+      const float z = depth.at(u, v);
+      if (DepthImage::isMeasurement(z)) points_C.push_back(camera.backProject(u, v, z));
+    }
+  }
+  return points_C;
+}
+
+/// Builds the normal equations at pose T_W_C. The increment is expressed about the camera centre c
+/// (world axes), so rotation and translation stay decoupled wherever the volume's origin lies:
+/// d/dxi D(exp(xi) (p - c) + c) = [ (p - c) x grad D ; grad D ].
+NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_C, const TsdfVolume& volume,
+                                     const Eigen::Isometry3d& T_W_C, float huber_k, const DepthNoiseModel* noise) {
+  const Eigen::Isometry3f T = T_W_C.cast<float>();
+  const Eigen::Vector3f c = T.translation();
+  const float dmax = volume.positiveTruncation();
+  const int n = static_cast<int>(points_C.size());
+  NormalEquations sum;
+#pragma omp parallel for schedule(static) reduction(sumEquations : sum)
+  for (int idx = 0; idx < n; ++idx) {
+    const Eigen::Vector3f p_W = T * points_C[idx];
+    FieldSample s;
+    if (!volume.sample(p_W, &s) || !(std::fabs(s.distance_m) < dmax)) continue;
+    const Eigen::Vector3f lever = p_W - c;
+    Vector6d J;
+    J.head<3>() = lever.cross(s.gradient).cast<double>();
+    J.tail<3>() = s.gradient.cast<double>();
+    double w;
+    if (noise) {
+      const float z = points_C[idx].z();
+      const float sigma_ratio = noise->sigma(z) / noise->sigma(static_cast<float>(noise->reference_depth_m));
+      w = huberWeight(s.distance_m, huber_k * std::max(1.0f, sigma_ratio)) * noise->weight(z);
+    } else {
+      w = huberWeight(s.distance_m, huber_k);
+    }
+    sum.H.noalias() += (w * J) * J.transpose();
+    sum.g.noalias() += (w * s.distance_m) * J;
+    sum.squared_residual_sum += static_cast<double>(s.distance_m) * s.distance_m;
+    sum.squared_lever_sum += lever.squaredNorm();
+    ++sum.count;
+  }
+  return sum;
+}
+
+/// Smallest over largest eigenvalue of the data term, with the rotational block scaled by the RMS
+/// lever arm so both blocks are in the same units.
+double inverseCondition(const NormalEquations& eq) {
+  const double lever_rms = std::sqrt(eq.squared_lever_sum / eq.count);
+  Vector6d scale;
+  scale << Eigen::Vector3d::Constant(1.0 / std::max(lever_rms, 1e-6)), Eigen::Vector3d::Ones();
+  const Matrix6d H_scaled = scale.asDiagonal() * eq.H * scale.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> solver(H_scaled, Eigen::EigenvaluesOnly);
+  const Vector6d& ev = solver.eigenvalues();
+  return ev(5) > 0.0 ? std::max(ev(0), 0.0) / ev(5) : 0.0;
+}
+
+Eigen::Isometry3d applyIncrementAboutCentre(const Vector6d& xi, const Eigen::Isometry3d& T_W_C) {
+  const Eigen::Vector3d c = T_W_C.translation();
+  return Eigen::Translation3d(c) * expSe3(xi) * Eigen::Translation3d(-c) * T_W_C;
+}
+
+}  // namespace
+
+const char* toString(TrackStatus status) {
+  switch (status) {
+    case TrackStatus::kOk: return "ok";
+    case TrackStatus::kNotConverged: return "not_converged";
+    case TrackStatus::kTooFewPoints: return "too_few_points";
+    case TrackStatus::kDegenerate: return "degenerate";
+    case TrackStatus::kDiverged: return "diverged";
+    case TrackStatus::kBadInput: return "bad_input";
+  }
+  return "unknown";
+}
+
+std::vector<std::string> TrackerConfig::validate() const {
+  Violations v;
+  v.require(!levels.empty(), "levels must not be empty");
+  for (size_t i = 0; i < levels.size(); ++i) {
+    const std::string name = "levels[" + std::to_string(i) + "]";
+    v.requireInRange(name + ".stride", levels[i].stride, 1, 64);
+    v.requireInRange(name + ".max_iterations", levels[i].max_iterations, 0, 1000);
+  }
+  v.requirePositive("huber_coefficient", huber_coefficient);
+  v.requireNonNegative("regularization", regularization);
+  v.requireNonNegative("convergence_threshold", convergence_threshold);
+  v.requireInRange("min_valid_points", min_valid_points, 6, 100000000);
+  v.requireInRange("min_inverse_condition", min_inverse_condition, 0.0, 1.0);
+  v.requirePositive("max_final_step", max_final_step);
+  v.merge("noise.", noise.validate());
+  v.requirePositive("max_translation_m", max_translation_m);
+  v.requirePositive("max_rotation_rad", max_rotation_rad);
+  return v.list();
+}
+
+Tracker::Tracker(const TrackerConfig& config) : config_(config) {
+  throwIfInvalid("tracker config", config.validate());
+}
+
+TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera, const TsdfVolume& volume,
+                           const Eigen::Isometry3d& T_W_C_guess) const {
+  TrackResult result;
+  result.T_W_C = T_W_C_guess;
+  auto fail = [&result, &T_W_C_guess](TrackStatus status, const std::string& message) {
+    result.status = status;
+    result.message = message;
+    result.T_W_C = T_W_C_guess;
+    return result;
+  };
+  if (depth.width() != camera.width || depth.height() != camera.height) {
+    std::ostringstream msg;
+    msg << "depth image is " << depth.width() << "x" << depth.height() << " but the camera is "
+        << camera.width << "x" << camera.height;
+    return fail(TrackStatus::kBadInput, msg.str());
+  }
+  if (depth.countMeasurements() == 0) return fail(TrackStatus::kBadInput, "depth image holds no valid measurement");
+  if (!T_W_C_guess.matrix().allFinite()) return fail(TrackStatus::kBadInput, "pose guess is not finite");
+
+  const float huber_k = static_cast<float>(config_.huber_coefficient * volume.positiveTruncation());
+  Eigen::Isometry3d T_W_C = T_W_C_guess;
+  NormalEquations last;
+  for (const PyramidLevel& level : config_.levels) {
+    const std::vector<Eigen::Vector3f> points_C = backProjectSubsampled(depth, camera, level.stride);
+    int iterations = 0;
+    for (int it = 1; it <= level.max_iterations; ++it) {
+      last = buildNormalEquations(points_C, volume, T_W_C, huber_k, config_.sensor_weights ? &config_.noise : nullptr);
+      if (last.count < config_.min_valid_points) {
+        std::ostringstream msg;
+        msg << "only " << last.count << " points at stride " << level.stride
+            << " fell on observed parts of the volume (need " << config_.min_valid_points << ")";
+        result.valid_points = last.count;
+        return fail(TrackStatus::kTooFewPoints, msg.str());
+      }
+      const double n = last.count;
+      const Matrix6d A = last.H / n + (config_.regularization * it) * Matrix6d::Identity();
+      const Vector6d xi = A.ldlt().solve(-last.g / n);
+      ++iterations;
+      result.final_step = xi.norm();
+      if (!xi.allFinite()) return fail(TrackStatus::kDiverged, "the Gauss-Newton step is not finite");
+      T_W_C = applyIncrementAboutCentre(xi, T_W_C);
+      if (result.final_step < config_.convergence_threshold) break;
+    }
+    result.iterations_per_level.push_back(iterations);
+  }
+
+  result.T_W_C = T_W_C;
+  result.valid_points = last.count;
+  result.rms_residual_m = last.count > 0 ? std::sqrt(last.squared_residual_sum / last.count) : 0.0;
+  result.inverse_condition = last.count > 0 ? inverseCondition(last) : 0.0;
+
+  const Eigen::Isometry3d motion = T_W_C_guess.inverse() * T_W_C;
+  std::ostringstream msg;
+  if (!T_W_C.matrix().allFinite()) return fail(TrackStatus::kDiverged, "the pose became non-finite");
+  if (motion.translation().norm() > config_.max_translation_m || rotationAngle(motion) > config_.max_rotation_rad) {
+    msg << "the pose moved " << motion.translation().norm() << " m and " << rotationAngle(motion)
+        << " rad from the guess (limits " << config_.max_translation_m << " m, " << config_.max_rotation_rad
+        << " rad)";
+    return fail(TrackStatus::kDiverged, msg.str());
+  }
+  if (result.inverse_condition < config_.min_inverse_condition) {
+    msg << "the geometry does not constrain all six degrees of freedom (inverse condition "
+        << result.inverse_condition << " < " << config_.min_inverse_condition << ")";
+    return fail(TrackStatus::kDegenerate, msg.str());
+  }
+  if (result.final_step > config_.max_final_step) {
+    msg << "still moving after the last iteration (|delta xi| = " << result.final_step << " > "
+        << config_.max_final_step << ")";
+    result.status = TrackStatus::kNotConverged;
+    result.message = msg.str();
+    return result;
+  }
+  result.status = TrackStatus::kOk;
+  return result;
+}
+
+}  // namespace sdf_tracker

@@ -1,0 +1,96 @@
+#include "sdf_tracker/core/tum_sequence.h"
+
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include <sys/stat.h>
+
+namespace sdf_tracker {
+
+namespace {
+
+bool fileExists(const std::string& path) {
+  struct stat info;
+  return ::stat(path.c_str(), &info) == 0;
+}
+
+/// Reads "fx fy cx cy width height depth_factor" (after '#' comments).
+void readIntrinsicsFile(const std::string& path, PinholeCamera* camera, double* depth_factor) {
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream words(line);
+    if (!(words >> camera->fx >> camera->fy >> camera->cx >> camera->cy >> camera->width >> camera->height >>
+          *depth_factor)) {
+      throw std::runtime_error(path + ": expected \"fx fy cx cy width height depth_factor\", got \"" + line + "\"");
+    }
+    return;
+  }
+  throw std::runtime_error(path + ": no intrinsics line");
+}
+
+}  // namespace
+
+TumSequence TumSequence::open(const std::string& directory, const SequenceOptions& options) {
+  TumSequence sequence;
+  const std::string list_path = directory + "/depth.txt";
+  std::ifstream list(list_path);
+  if (!list) throw std::runtime_error(list_path + ": cannot open (is " + directory + " a TUM-layout sequence?)");
+  std::string line;
+  int line_number = 0;
+  while (std::getline(list, line)) {
+    ++line_number;
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream words(line);
+    Frame frame;
+    std::string relative;
+    if (!(words >> frame.timestamp_s >> relative)) {
+      throw std::runtime_error(list_path + ": line " + std::to_string(line_number) +
+                               " is not \"timestamp filename\": " + line);
+    }
+    if (!sequence.frames_.empty() && frame.timestamp_s <= sequence.frames_.back().timestamp_s) {
+      throw std::runtime_error(list_path + ": line " + std::to_string(line_number) + " has timestamp " +
+                               std::to_string(frame.timestamp_s) + ", not after the previous frame's");
+    }
+    frame.path = directory + "/" + relative;
+    sequence.frames_.push_back(frame);
+  }
+  if (sequence.frames_.empty()) throw std::runtime_error(list_path + ": lists no depth frames");
+
+  sequence.camera_ = PinholeCamera::tumFreiburg1();
+  sequence.intrinsics_source_ = "TUM freiburg1 defaults";
+  const std::string intrinsics_path = directory + "/intrinsics.txt";
+  if (fileExists(intrinsics_path)) {
+    readIntrinsicsFile(intrinsics_path, &sequence.camera_, &sequence.depth_factor_);
+    sequence.intrinsics_source_ = "intrinsics.txt";
+  }
+  if (options.camera) {
+    sequence.camera_ = *options.camera;
+    sequence.intrinsics_source_ = "options";
+  }
+  if (options.depth_factor) sequence.depth_factor_ = *options.depth_factor;
+  const auto violations = sequence.camera_.validate();
+  if (!violations.empty()) throw std::runtime_error(directory + ": invalid intrinsics: " + violations.front());
+  if (!(sequence.depth_factor_ > 0.0)) {
+    throw std::runtime_error(directory + ": depth factor must be > 0 (got " + std::to_string(sequence.depth_factor_) +
+                             ")");
+  }
+  const std::string gt_path = directory + "/groundtruth.txt";
+  if (fileExists(gt_path)) sequence.ground_truth_ = io::readTrajectory(gt_path);
+  return sequence;
+}
+
+DepthImage TumSequence::depth(size_t i) const {
+  DepthImage image = io::readDepthPng(depthPath(i), depth_factor_);
+  if (image.width() != camera_.width || image.height() != camera_.height) {
+    std::ostringstream msg;
+    msg << depthPath(i) << ": image is " << image.width() << "x" << image.height() << " but the intrinsics are for "
+        << camera_.width << "x" << camera_.height;
+    throw std::runtime_error(msg.str());
+  }
+  return image;
+}
+
+}  // namespace sdf_tracker

@@ -1,0 +1,62 @@
+#include "command_line.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace sdf_tracker::tools {
+
+CommandLine::CommandLine(int argc, char** argv, const std::vector<std::string>& options_with_value,
+                         const std::vector<std::string>& flags) {
+  auto contains = [](const std::vector<std::string>& list, const std::string& s) {
+    return std::find(list.begin(), list.end(), s) != list.end();
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.rfind("--", 0) != 0) throw std::invalid_argument("unexpected argument \"" + arg + "\"");
+    const std::string name = arg.substr(2);
+    if (contains(flags, name)) {
+      values_[name].push_back("true");
+    } else if (contains(options_with_value, name)) {
+      if (i + 1 >= argc) throw std::invalid_argument("option --" + name + " needs a value");
+      values_[name].push_back(argv[++i]);
+    } else {
+      throw std::invalid_argument("unknown option \"" + arg + "\" (see --help)");
+    }
+  }
+}
+
+std::string CommandLine::get(const std::string& name, const std::string& fallback) const {
+  auto it = values_.find(name);
+  return it == values_.end() ? fallback : it->second.back();
+}
+
+std::vector<std::string> CommandLine::getAll(const std::string& name) const {
+  auto it = values_.find(name);
+  return it == values_.end() ? std::vector<std::string>{} : it->second;
+}
+
+std::string CommandLine::require(const std::string& name) const {
+  if (!has(name)) throw std::invalid_argument("missing required option --" + name);
+  return get(name);
+}
+
+double CommandLine::getDouble(const std::string& name, double fallback) const {
+  if (!has(name)) return fallback;
+  std::istringstream in(get(name));
+  double value;
+  std::string rest;
+  if (!(in >> value) || (in >> rest) || !std::isfinite(value)) {
+    throw std::invalid_argument("--" + name + ": expected a number, got \"" + get(name) + "\"");
+  }
+  return value;
+}
+
+int CommandLine::getInt(const std::string& name, int fallback) const {
+  const double value = getDouble(name, fallback);
+  if (value != std::floor(value)) throw std::invalid_argument("--" + name + ": expected an integer, got \"" + get(name) + "\"");
+  return static_cast<int>(value);
+}
+
+}  // namespace sdf_tracker::tools

@@ -1,0 +1,29 @@
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace sdf_tracker::tools {
+
+/// A small "--name value" parser for the command-line tools. Options listed as flags take no
+/// value; every other option takes exactly one; repeated options keep every value in order.
+class CommandLine {
+ public:
+  /// Throws std::invalid_argument for an unknown option or a missing value.
+  CommandLine(int argc, char** argv, const std::vector<std::string>& options_with_value,
+              const std::vector<std::string>& flags);
+
+  bool has(const std::string& name) const { return values_.count(name) > 0; }
+  std::string get(const std::string& name, const std::string& fallback = "") const;
+  std::vector<std::string> getAll(const std::string& name) const;
+  /// Throws std::invalid_argument naming the option when missing.
+  std::string require(const std::string& name) const;
+  int getInt(const std::string& name, int fallback) const;
+  double getDouble(const std::string& name, double fallback) const;
+
+ private:
+  std::map<std::string, std::vector<std::string>> values_;
+};
+
+}  // namespace sdf_tracker::tools

@@ -1,0 +1,41 @@
+// sdf_tracker_evaluate: ATE and RPE of a TUM trajectory against ground truth, with a plot.
+
+#include <iostream>
+
+#include "command_line.h"
+#include "report.h"
+#include "sdf_tracker/core/io.h"
+
+namespace {
+
+const char* kUsage = R"(usage: sdf_tracker_evaluate --groundtruth FILE --estimate FILE [--plot FILE.png]
+
+Absolute trajectory error (rigid alignment) and relative pose error (1 s window), as defined by
+the TUM RGB-D benchmark; timestamps are associated within 0.02 s.
+)";
+
+int run(int argc, char** argv) {
+  using namespace sdf_tracker;
+  const tools::CommandLine args(argc, argv, {"groundtruth", "estimate", "plot"}, {"help"});
+  if (args.has("help")) {
+    std::cout << kUsage;
+    return 0;
+  }
+  const auto ground_truth = io::readTrajectory(args.require("groundtruth"));
+  const auto estimate = io::readTrajectory(args.require("estimate"));
+  const auto accuracy = tools::evaluateAccuracy(estimate, ground_truth);
+  std::cout << tools::formatAccuracy(accuracy);
+  if (args.has("plot")) tools::writeAccuracyPlot(args.get("plot"), accuracy, args.get("estimate"));
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "sdf_tracker_evaluate: error: " << e.what() << "\n";
+    return 1;
+  }
+}
