@@ -119,7 +119,10 @@ TriangleMesh extractMesh(const TsdfVolume& volume) {
           Eigen::Vector3f towards_free = Eigen::Vector3f::Zero();
           for (int m = 0; m < n_out; ++m) towards_free += cornerOffset(outside[m]).cast<float>() / n_out;
           for (int m = 0; m < n_in; ++m) towards_free -= cornerOffset(inside[m]).cast<float>() / n_in;
-          const Eigen::Vector3f face = (poly[1].p_W - poly[0].p_W).cross(poly[2].p_W - poly[0].p_W);
+          // The diagonals' cross product orients a quad robustly even when one side is tiny.
+          const Eigen::Vector3f face =
+              n_poly == 3 ? Eigen::Vector3f((poly[1].p_W - poly[0].p_W).cross(poly[2].p_W - poly[0].p_W))
+                          : Eigen::Vector3f((poly[2].p_W - poly[0].p_W).cross(poly[3].p_W - poly[1].p_W));
           if (face.dot(towards_free) < 0.0f) std::reverse(poly.begin(), poly.begin() + n_poly);
           for (int m = 1; m + 1 < n_poly; ++m) {
             slice.push_back(poly[0]);

@@ -182,9 +182,9 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
         result.valid_points = last.count;
         return fail(TrackStatus::kTooFewPoints, msg.str());
       }
-      const double n = last.count;
-      const Matrix6d A = last.H / n + (config_.regularization * it) * Matrix6d::Identity();
-      const Vector6d xi = A.ldlt().solve(-last.g / n);
+      // Sums, not means: alpha only matters along directions the points barely constrain.
+      const Matrix6d A = last.H + (config_.regularization * it) * Matrix6d::Identity();
+      const Vector6d xi = A.ldlt().solve(-last.g);
       ++iterations;
       result.final_step = xi.norm();
       if (!xi.allFinite()) return fail(TrackStatus::kDiverged, "the Gauss-Newton step is not finite");

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Every test: installs dependencies, builds with tests, runs the unit and end-to-end gtests (and
+# the rostests once there are some) through catkin, and prints one "N passed, N failed" line.
+# Real-data tests read SDF_TRACKER_DATA (default ../shared/data) and skip visibly without it.
+set -euo pipefail
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+bash "$repo/scripts/install_dependencies.sh"
+bash "$repo/scripts/build.sh" -DCATKIN_ENABLE_TESTING=ON
+export PATH="/usr/bin:$PATH"
+cd "$repo/build/ws"
+rm -rf build/test_results
+set +u
+# shellcheck disable=SC1091
+source devel/setup.bash
+set -u
+catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$(nproc)" run_tests \
+  > "$repo/build/run_tests.log" 2>&1 || true
+# What the tests printed about themselves: figures, skips, failures.
+grep -E "^\[ (figures|  SKIPPED|  FAILED) *\]|SKIPPED:|Failure|\.cpp:[0-9]+:" "$repo/build/run_tests.log" | sort -u || true
+# Count from the result files, so a crashed test binary counts as a failure too.
+/usr/bin/python3 - "$repo/build/ws/build/test_results" <<'PY'
+import glob, os, sys, xml.etree.ElementTree as ET
+root = sys.argv[1]
+passed = failed = skipped = 0
+files = glob.glob(os.path.join(root, "**", "*.xml"), recursive=True)
+for f in files:
+    try:
+        tree = ET.parse(f)
+    except ET.ParseError:
+        print(f"unreadable result file {f}: counted as a failure"); failed += 1; continue
+    for case in tree.iter("testcase"):
+        if case.find("failure") is not None or case.find("error") is not None:
+            failed += 1; print("FAILED:", case.get("classname"), case.get("name"))
+        elif case.find("skipped") is not None or case.get("status") == "notrun" or case.get("result") == "skipped":
+            skipped += 1
+        else:
+            passed += 1
+if not files:
+    print("no test result files were written"); failed += 1
+print(f"tests: {passed} passed, {failed} failed, {skipped} skipped")
+sys.exit(1 if failed else 0)
+PY

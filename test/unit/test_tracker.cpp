@@ -1,0 +1,142 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "sdf_tracker/core/se3.h"
+#include "sdf_tracker/core/tracker.h"
+#include "test_helpers.h"
+
+namespace sdf_tracker {
+namespace {
+
+// Acceptance bounds of the tracker on exact synthetic depth.
+constexpr double kMaxTranslationError_m = 1e-3;
+constexpr double kMaxRotationError_rad = 0.1 * M_PI / 180.0;
+// 1 and 2 threads only differ in the order of floating-point sums.
+constexpr double kThreadInvariance = 1e-6;
+
+/// The synthetic room fused once from the desk path's start pose.
+class TrackerFixture : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    T_W_C = synthetic::cameraPose(synthetic::Motion::kDesk, 0.0, 10.0);
+    depth = test::renderRoom(T_W_C);
+    volume = std::make_unique<TsdfVolume>(test::roomVolume());
+    Integrator(IntegratorConfig{}).integrate(depth, camera, T_W_C, volume.get());
+  }
+
+  PinholeCamera camera = test::testCamera();
+  Eigen::Isometry3d T_W_C;
+  DepthImage depth;
+  std::unique_ptr<TsdfVolume> volume;
+};
+
+TEST_F(TrackerFixture, RecoversAKnownOffsetOfTwoCentimetresAndTwoDegrees) {
+  const Tracker tracker(TrackerConfig{});
+  const Eigen::Isometry3d guess = test::perturbed(T_W_C, 0.02, 2.0 * M_PI / 180.0);
+  const TrackResult result = tracker.track(depth, camera, *volume, guess);
+  ASSERT_EQ(result.status, TrackStatus::kOk) << result.message;
+  const Eigen::Isometry3d error = T_W_C.inverse() * result.T_W_C;
+  EXPECT_LT(error.translation().norm(), kMaxTranslationError_m);
+  EXPECT_LT(rotationAngle(error), kMaxRotationError_rad);
+  EXPECT_EQ(result.iterations_per_level.size(), 3u);
+  EXPECT_GT(result.valid_points, 1000);
+  EXPECT_LT(result.rms_residual_m, 0.005);
+}
+
+TEST_F(TrackerFixture, ScheduleIsDataAndLevelsStopEarlyWhenConverged) {
+  TrackerConfig config;
+  config.levels = {{8, 30}, {1, 30}};
+  const TrackResult result = Tracker(config).track(depth, camera, *volume, test::perturbed(T_W_C, 0.01, 0.01));
+  ASSERT_EQ(result.iterations_per_level.size(), 2u);
+  EXPECT_LT(result.iterations_per_level[1], 30) << "the fine level starts near the optimum and must stop early";
+  EXPECT_TRUE(result.ok()) << result.message;
+}
+
+TEST_F(TrackerFixture, OneAndTwoThreadsGiveTheSamePose) {
+#ifdef _OPENMP
+  const Tracker tracker(TrackerConfig{});
+  const Eigen::Isometry3d guess = test::perturbed(T_W_C, 0.02, 0.03);
+  omp_set_num_threads(1);
+  const TrackResult one = tracker.track(depth, camera, *volume, guess);
+  omp_set_num_threads(2);
+  const TrackResult two = tracker.track(depth, camera, *volume, guess);
+  const Eigen::Isometry3d difference = one.T_W_C.inverse() * two.T_W_C;
+  EXPECT_LT(difference.translation().norm(), kThreadInvariance);
+  EXPECT_LT(rotationAngle(difference), kThreadInvariance);
+#else
+  GTEST_SKIP() << "built without OpenMP: nothing to compare";
+#endif
+}
+
+TEST_F(TrackerFixture, BadFramesGiveAStatusNotACrash) {
+  const Tracker tracker(TrackerConfig{});
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+
+  const TrackResult all_invalid = tracker.track(DepthImage(camera.width, camera.height, 0.0f), camera, *volume, T_W_C);
+  EXPECT_EQ(all_invalid.status, TrackStatus::kBadInput);
+  EXPECT_TRUE(all_invalid.T_W_C.isApprox(T_W_C)) << "a failed frame must hold the pose";
+
+  const TrackResult all_nan = tracker.track(DepthImage(camera.width, camera.height, nan), camera, *volume, T_W_C);
+  EXPECT_EQ(all_nan.status, TrackStatus::kBadInput);
+
+  const TrackResult wrong_size = tracker.track(DepthImage(640, 480, 1.0f), camera, *volume, T_W_C);
+  EXPECT_EQ(wrong_size.status, TrackStatus::kBadInput);
+  EXPECT_NE(wrong_size.message.find("640x480"), std::string::npos) << wrong_size.message;
+
+  Eigen::Isometry3d nan_pose = T_W_C;
+  nan_pose.translation().x() = nan;
+  EXPECT_EQ(tracker.track(depth, camera, *volume, nan_pose).status, TrackStatus::kBadInput);
+
+  // Scattered NaNs among good pixels are just missing measurements.
+  DepthImage holes = depth;
+  for (int v = 0; v < holes.height(); v += 3)
+    for (int u = 0; u < holes.width(); u += 2) holes.at(u, v) = nan;
+  EXPECT_TRUE(tracker.track(holes, camera, *volume, T_W_C).ok());
+}
+
+TEST_F(TrackerFixture, FramesOutsideTheMapHaveTooFewPoints) {
+  Eigen::Isometry3d far_away = T_W_C;
+  far_away.translation() += Eigen::Vector3d(50.0, 0.0, 0.0);
+  const TrackResult result = Tracker(TrackerConfig{}).track(depth, camera, *volume, far_away);
+  EXPECT_EQ(result.status, TrackStatus::kTooFewPoints);
+  EXPECT_TRUE(result.T_W_C.isApprox(far_away));
+}
+
+TEST(Tracker, ASinglePlaneIsReportedAsDegenerate) {
+  const PinholeCamera camera = test::testCamera();
+  synthetic::NoiseModel exact;
+  exact.enabled = false;
+  const Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+  const DepthImage wall = synthetic::Scene::singleWall().render(camera, T_W_C, exact, 0);
+  VolumeConfig config;
+  config.dims = Eigen::Vector3i(200, 160, 60);
+  config.voxel_size_m = 0.02;
+  config.origin_W = Eigen::Vector3d(-2.0, -1.6, 1.4);
+  TsdfVolume volume(config);
+  Integrator(IntegratorConfig{}).integrate(wall, camera, T_W_C, &volume);
+  const TrackResult result = Tracker(TrackerConfig{}).track(wall, camera, volume, test::perturbed(T_W_C, 0.01, 0.01));
+  EXPECT_EQ(result.status, TrackStatus::kDegenerate) << result.message << " inverse condition " << result.inverse_condition;
+  EXPECT_TRUE(result.T_W_C.isApprox(test::perturbed(T_W_C, 0.01, 0.01))) << "a degenerate frame must hold the pose";
+}
+
+TEST(TrackerConfig, RejectsEveryInvalidValue) {
+  TrackerConfig config;
+  config.levels = {{0, 5}, {2, -1}};
+  config.huber_coefficient = -1.0;
+  const auto violations = config.validate();
+  ASSERT_EQ(violations.size(), 3u);
+  EXPECT_NE(violations[0].find("levels[0].stride"), std::string::npos);
+  EXPECT_NE(violations[1].find("levels[1].max_iterations"), std::string::npos);
+  EXPECT_NE(violations[2].find("huber_coefficient must be > 0 (got -1)"), std::string::npos);
+  config.levels.clear();
+  EXPECT_THROW(Tracker{config}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sdf_tracker
