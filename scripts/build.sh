@@ -5,8 +5,18 @@
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 ws="$repo/build/ws"
-mkdir -p "$ws/src"
-[ -L "$ws/src/sdf_tracker" ] || ln -sfn "$repo" "$ws/src/sdf_tracker"
+# The package directory in the workspace mirrors the repository entry by entry (symbolic links),
+# leaving out build/ itself: a link to the whole repository would put the workspace inside its
+# own package, and rospack/roslaunch would crawl round that loop forever.
+pkg="$ws/src/sdf_tracker"
+[ -L "$pkg" ] && rm "$pkg"
+mkdir -p "$pkg"
+for entry in "$repo"/* "$repo"/.ci; do
+  name="$(basename "$entry")"
+  case "$name" in build|output) continue ;; esac
+  ln -sfn "$entry" "$pkg/$name"
+done
+for link in "$pkg"/*; do [ -e "$link" ] || rm -f "$link"; done  # entries removed from the repo
 # catkin's Python helpers live in Debian's interpreter, not in a pyenv one that may be first on PATH.
 export PATH="/usr/bin:$PATH"
 set +u

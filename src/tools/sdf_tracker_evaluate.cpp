@@ -9,20 +9,25 @@
 namespace {
 
 const char* kUsage = R"(usage: sdf_tracker_evaluate --groundtruth FILE --estimate FILE [--plot FILE.png]
+                            [--estimate-time-offset S]
 
 Absolute trajectory error (rigid alignment) and relative pose error (1 s window), as defined by
-the TUM RGB-D benchmark; timestamps are associated within 0.02 s.
+the TUM RGB-D benchmark; timestamps are associated within 0.02 s. --estimate-time-offset S is
+subtracted from the estimate's timestamps first (tum_to_bag shifts sequences that start at 0 s
+by 1 s, since ROS time 0 means "no time").
 )";
 
 int run(int argc, char** argv) {
   using namespace sdf_tracker;
-  const tools::CommandLine args(argc, argv, {"groundtruth", "estimate", "plot"}, {"help"});
+  const tools::CommandLine args(argc, argv, {"groundtruth", "estimate", "plot", "estimate-time-offset"}, {"help"});
   if (args.has("help")) {
     std::cout << kUsage;
     return 0;
   }
   const auto ground_truth = io::readTrajectory(args.require("groundtruth"));
-  const auto estimate = io::readTrajectory(args.require("estimate"));
+  auto estimate = io::readTrajectory(args.require("estimate"));
+  const double offset_s = args.getDouble("estimate-time-offset", 0.0);
+  for (auto& pose : estimate) pose.timestamp_s -= offset_s;
   const auto accuracy = tools::evaluateAccuracy(estimate, ground_truth);
   std::cout << tools::formatAccuracy(accuracy);
   if (args.has("plot")) tools::writeAccuracyPlot(args.get("plot"), accuracy, args.get("estimate"));

@@ -1,0 +1,41 @@
+#pragma once
+
+#include <string>
+
+#include <geometry_msgs/Pose.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <visualization_msgs/Marker.h>
+
+#include "sdf_tracker/core/camera.h"
+#include "sdf_tracker/core/depth_image.h"
+#include "sdf_tracker/core/surface.h"
+
+/// Conversions between ROS messages and core types, in one place (REP 118 depth: 16UC1
+/// millimetres or 32FC1 metres, 0 or NaN = no measurement).
+namespace sdf_tracker_ros {
+
+/// Converts a depth image to metres. Throws std::invalid_argument naming the encoding or the
+/// inconsistency (step, size) when the image cannot be read.
+sdf_tracker::DepthImage toDepthImage(const sensor_msgs::Image& msg);
+
+/// A 32FC1 image in metres (NaN where there is no measurement).
+sensor_msgs::Image toImageMsg(const sdf_tracker::DepthImage& depth, const std_msgs::Header& header);
+
+/// Intrinsics from camera_info (K); throws std::invalid_argument for a zero or non-finite K or size.
+sdf_tracker::PinholeCamera toCamera(const sensor_msgs::CameraInfo& info);
+
+geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T);
+
+/// A triangle-list marker of the mesh (world frame).
+visualization_msgs::Marker toMarker(const sdf_tracker::TriangleMesh& mesh, const std_msgs::Header& header);
+
+}  // namespace sdf_tracker_ros
+
+#include <sensor_msgs/PointCloud2.h>
+
+namespace sdf_tracker_ros {
+/// Surface points with normals as PointCloud2 (x y z normal_x normal_y normal_z), built with PCL.
+/// Implemented in its own translation unit so that only one file compiles PCL.
+sensor_msgs::PointCloud2 toCloudMsg(const sdf_tracker::SurfaceCloud& cloud, const std_msgs::Header& header);
+}  // namespace sdf_tracker_ros

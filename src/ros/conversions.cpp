@@ -1,0 +1,118 @@
+#include "sdf_tracker/ros/conversions.h"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+
+#include <sensor_msgs/image_encodings.h>
+
+namespace sdf_tracker_ros {
+
+namespace enc = sensor_msgs::image_encodings;
+
+sdf_tracker::DepthImage toDepthImage(const sensor_msgs::Image& msg) {
+  const bool millimetres = msg.encoding == enc::TYPE_16UC1 || msg.encoding == enc::MONO16;
+  const bool metres = msg.encoding == enc::TYPE_32FC1;
+  if (!millimetres && !metres) {
+    throw std::invalid_argument("unsupported depth encoding \"" + msg.encoding +
+                                "\" (expected 16UC1 millimetres or 32FC1 metres)");
+  }
+  const size_t pixel_bytes = millimetres ? 2 : 4;
+  if (msg.width == 0 || msg.height == 0 || msg.step < msg.width * pixel_bytes ||
+      msg.data.size() < static_cast<size_t>(msg.step) * msg.height) {
+    throw std::invalid_argument("inconsistent image: " + std::to_string(msg.width) + "x" + std::to_string(msg.height) +
+                                ", step " + std::to_string(msg.step) + ", " + std::to_string(msg.data.size()) +
+                                " bytes");
+  }
+  if (msg.is_bigendian) throw std::invalid_argument("big-endian depth images are not supported");
+  sdf_tracker::DepthImage depth(static_cast<int>(msg.width), static_cast<int>(msg.height));
+  for (uint32_t v = 0; v < msg.height; ++v) {
+    const uint8_t* row = msg.data.data() + static_cast<size_t>(v) * msg.step;
+    for (uint32_t u = 0; u < msg.width; ++u) {
+      float z;
+      if (millimetres) {
+        uint16_t raw;
+        std::memcpy(&raw, row + u * 2, 2);
+        z = raw == 0 ? 0.0f : raw * 0.001f;
+      } else {
+        std::memcpy(&z, row + u * 4, 4);
+      }
+      depth.at(static_cast<int>(u), static_cast<int>(v)) = z;
+    }
+  }
+  return depth;
+}
+
+sensor_msgs::Image toImageMsg(const sdf_tracker::DepthImage& depth, const std_msgs::Header& header) {
+  sensor_msgs::Image msg;
+  msg.header = header;
+  msg.width = static_cast<uint32_t>(depth.width());
+  msg.height = static_cast<uint32_t>(depth.height());
+  msg.encoding = enc::TYPE_32FC1;
+  msg.is_bigendian = 0;
+  msg.step = msg.width * 4;
+  msg.data.resize(static_cast<size_t>(msg.step) * msg.height);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int v = 0; v < depth.height(); ++v) {
+    for (int u = 0; u < depth.width(); ++u) {
+      const float z = sdf_tracker::DepthImage::isMeasurement(depth.at(u, v)) ? depth.at(u, v) : nan;
+      std::memcpy(msg.data.data() + (static_cast<size_t>(v) * depth.width() + u) * 4, &z, 4);
+    }
+  }
+  return msg;
+}
+
+sdf_tracker::PinholeCamera toCamera(const sensor_msgs::CameraInfo& info) {
+  sdf_tracker::PinholeCamera camera;
+  camera.fx = info.K[0];
+  camera.fy = info.K[4];
+  camera.cx = info.K[2];
+  camera.cy = info.K[5];
+  camera.width = static_cast<int>(info.width);
+  camera.height = static_cast<int>(info.height);
+  const auto violations = camera.validate();
+  if (!violations.empty()) throw std::invalid_argument("camera_info: " + violations.front());
+  return camera;
+}
+
+geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T) {
+  geometry_msgs::Pose pose;
+  const Eigen::Quaterniond q(T.linear());
+  pose.position.x = T.translation().x();
+  pose.position.y = T.translation().y();
+  pose.position.z = T.translation().z();
+  pose.orientation.x = q.x();
+  pose.orientation.y = q.y();
+  pose.orientation.z = q.z();
+  pose.orientation.w = q.w();
+  return pose;
+}
+
+visualization_msgs::Marker toMarker(const sdf_tracker::TriangleMesh& mesh, const std_msgs::Header& header) {
+  visualization_msgs::Marker marker;
+  marker.header = header;
+  marker.ns = "sdf_tracker";
+  marker.id = 0;
+  marker.type = visualization_msgs::Marker::TRIANGLE_LIST;
+  marker.action = visualization_msgs::Marker::ADD;
+  marker.pose.orientation.w = 1.0;
+  marker.scale.x = marker.scale.y = marker.scale.z = 1.0;
+  marker.color.r = 0.75f;
+  marker.color.g = 0.75f;
+  marker.color.b = 0.8f;
+  marker.color.a = 1.0f;
+  marker.points.reserve(mesh.triangles.size() * 3);
+  for (const auto& t : mesh.triangles) {
+    for (int m = 0; m < 3; ++m) {
+      geometry_msgs::Point p;
+      p.x = mesh.vertices_W[t[m]].x();
+      p.y = mesh.vertices_W[t[m]].y();
+      p.z = mesh.vertices_W[t[m]].z();
+      marker.points.push_back(p);
+    }
+  }
+  return marker;
+}
+
+}  // namespace sdf_tracker_ros

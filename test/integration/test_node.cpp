@@ -1,0 +1,221 @@
+// Drives the real sdf_tracker_node: synthetic QVGA depth + camera_info in, lock-step with its
+// ~status; checks tf, path, cloud, accuracy against the offline pipeline, bad input, the
+// save_mesh service and rejected reconfiguration.
+
+#include <gtest/gtest.h>
+
+#include <condition_variable>
+#include <mutex>
+
+#include <dynamic_reconfigure/Reconfigure.h>
+#include <geometry_msgs/PoseStamped.h>
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include "sdf_tracker/SavePath.h"
+#include "sdf_tracker/TrackingStatus.h"
+#include "sdf_tracker/core/evaluation.h"
+#include "sdf_tracker/core/io.h"
+#include "sdf_tracker/core/parameters.h"
+#include "sdf_tracker/core/pipeline.h"
+#include "sdf_tracker/core/synthetic.h"
+#include "sdf_tracker/ros/conversions.h"
+
+namespace st = sdf_tracker;
+
+namespace {
+
+// The node and the offline pipeline see the same frames; they may differ only by float order.
+constexpr double kMaxAteDifference_m = 0.01;
+constexpr double kStatusTimeout_s = 20.0;
+
+class NodeTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    image_pub_ = nh_.advertise<sensor_msgs::Image>("camera/depth/image", 5);
+    info_pub_ = nh_.advertise<sensor_msgs::CameraInfo>("camera/depth/camera_info", 5);
+    status_sub_ = nh_.subscribe("sdf_tracker/status", 50, &NodeTest::onStatus, this);
+    pose_sub_ = nh_.subscribe("sdf_tracker/pose", 50, &NodeTest::onPose, this);
+    path_sub_ = nh_.subscribe("sdf_tracker/path", 5, &NodeTest::onPath, this);
+    cloud_sub_ = nh_.subscribe("sdf_tracker/cloud", 1, &NodeTest::onCloud, this);
+    spinner_.start();
+    ASSERT_TRUE(ros::service::waitForService("sdf_tracker/save_mesh", ros::Duration(60.0)));
+    for (int i = 0; i < 100 && (image_pub_.getNumSubscribers() == 0 || info_pub_.getNumSubscribers() == 0); ++i) {
+      ros::Duration(0.1).sleep();
+    }
+  }
+
+  void onStatus(const sdf_tracker::TrackingStatus& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    statuses_.push_back(msg);
+    changed_.notify_all();
+  }
+  void onPose(const geometry_msgs::PoseStamped& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Eigen::Vector3d(msg.pose.position.x, msg.pose.position.y, msg.pose.position.z);
+    T.linear() = Eigen::Quaterniond(msg.pose.orientation.w, msg.pose.orientation.x, msg.pose.orientation.y,
+                                    msg.pose.orientation.z).toRotationMatrix();
+    poses_.push_back({msg.header.stamp.toSec(), T});
+  }
+  void onPath(const nav_msgs::Path& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    path_length_ = msg.poses.size();
+  }
+  void onCloud(const sensor_msgs::PointCloud2& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    cloud_points_ = msg.width * msg.height;
+  }
+
+  /// Publishes one frame and waits for the node's status about it.
+  sdf_tracker::TrackingStatus publishAndWait(const sensor_msgs::Image& image, const st::PinholeCamera& camera) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    const size_t before = statuses_.size();
+    sensor_msgs::CameraInfo info;
+    info.header = image.header;
+    info.width = camera.width;
+    info.height = camera.height;
+    info.K = {camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1};
+    lock.unlock();
+    info_pub_.publish(info);
+    image_pub_.publish(image);
+    lock.lock();
+    const bool arrived = changed_.wait_for(lock, std::chrono::duration<double>(kStatusTimeout_s),
+                                           [&] { return statuses_.size() > before; });
+    EXPECT_TRUE(arrived) << "no status for the frame stamped " << image.header.stamp;
+    return arrived ? statuses_.back() : sdf_tracker::TrackingStatus();
+  }
+
+  ros::NodeHandle nh_;
+  ros::AsyncSpinner spinner_{1};
+  ros::Publisher image_pub_, info_pub_;
+  ros::Subscriber status_sub_, pose_sub_, path_sub_, cloud_sub_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::vector<sdf_tracker::TrackingStatus> statuses_;
+  std::vector<st::io::StampedPose> poses_;
+  size_t path_length_ = 0;
+  size_t cloud_points_ = 0;
+};
+
+TEST_F(NodeTest, TracksASyntheticQvgaSequenceLikeTheOfflineRunnerAndSurvivesBadInput) {
+  const int frames = ros::NodeHandle("~").param("frames", 60);
+  const st::PinholeCamera camera = st::PinholeCamera::tumFreiburg1().scaledTo(320, 240);
+  const st::synthetic::Scene scene = st::synthetic::Scene::indoorRoom();
+  st::synthetic::NoiseModel noise;
+
+  // The offline pipeline with the node's settings (default preset, 160^3 grid).
+  st::Settings settings = st::preset("default");
+  settings.pipeline.volume.dims = Eigen::Vector3i(160, 160, 160);
+  st::SdfPipeline offline(settings.pipeline);
+  std::vector<st::io::StampedPose> offline_trajectory, ground_truth;
+
+  tf2_ros::Buffer tf_buffer;
+  tf2_ros::TransformListener tf_listener(tf_buffer);
+  for (int i = 0; i < frames; ++i) {
+    const double t = 10.0 + i / 30.0;
+    const Eigen::Isometry3d T_W_C = st::synthetic::cameraPose(st::synthetic::Motion::kDesk, i / 30.0, frames / 30.0);
+    const st::DepthImage depth = scene.render(camera, T_W_C, noise, 11 + i);
+    std_msgs::Header header;
+    header.stamp = ros::Time(t);
+    header.frame_id = "camera_depth_optical_frame";
+    header.seq = i;
+    const auto status = publishAndWait(sdf_tracker_ros::toImageMsg(depth, header), camera);
+    EXPECT_EQ(status.status, sdf_tracker::TrackingStatus::OK) << "frame " << i << ": " << status.status_text;
+    EXPECT_EQ(status.header.stamp, header.stamp) << "outputs carry the input's stamp";
+
+    offline.processFrame(depth, camera);
+    offline_trajectory.push_back({t, offline.pose()});
+    ground_truth.push_back({t, T_W_C});
+
+    if (i == frames / 2) {  // a frame in an encoding the node cannot read: dropped, node alive
+      sensor_msgs::Image colour = sdf_tracker_ros::toImageMsg(depth, header);
+      colour.encoding = "rgb8";
+      colour.header.stamp = ros::Time(t + 0.01);
+      const auto bad = publishAndWait(colour, camera);
+      EXPECT_EQ(bad.status, sdf_tracker::TrackingStatus::BAD_INPUT);
+      EXPECT_NE(bad.status_text.find("rgb8"), std::string::npos) << bad.status_text;
+    }
+  }
+  ros::Duration(1.5).sleep();  // the cloud timer runs at 2 Hz
+
+  std::lock_guard<std::mutex> lock(mutex_);
+  EXPECT_EQ(static_cast<int>(poses_.size()), frames);
+  EXPECT_EQ(static_cast<int>(path_length_), frames);
+  EXPECT_GT(cloud_points_, 1000u);
+  EXPECT_TRUE(tf_buffer.canTransform("map", "camera_depth_optical_frame", ros::Time(10.0 + (frames - 1) / 30.0)))
+      << "tf map -> camera at the last frame's stamp";
+
+  const double node_ate = st::evaluation::computeAte(poses_, ground_truth).translation_m.rmse;
+  const double offline_ate = st::evaluation::computeAte(offline_trajectory, ground_truth).translation_m.rmse;
+  std::cout << "[ figures  ] node ATE " << node_ate * 1000 << " mm, offline ATE " << offline_ate * 1000 << " mm\n";
+  EXPECT_LT(std::abs(node_ate - offline_ate), kMaxAteDifference_m);
+}
+
+TEST_F(NodeTest, SaveMeshWritesAPlyThatLoadsBack) {
+  // The map holds the previous test's frames when run in order; feed a few here regardless.
+  const st::PinholeCamera camera = st::PinholeCamera::tumFreiburg1().scaledTo(320, 240);
+  st::synthetic::NoiseModel exact;
+  exact.enabled = false;
+  for (int i = 0; i < 3; ++i) {
+    std_msgs::Header header;
+    header.stamp = ros::Time(100.0 + i);
+    header.frame_id = "camera_depth_optical_frame";
+    const auto T = st::synthetic::cameraPose(st::synthetic::Motion::kDesk, 0.0, 10.0);
+    publishAndWait(sdf_tracker_ros::toImageMsg(st::synthetic::Scene::indoorRoom().render(camera, T, exact, 0), header),
+                   camera);
+  }
+  sdf_tracker::SavePath save;
+  save.request.path = "/tmp/sdf_tracker_node_test_mesh.ply";
+  ASSERT_TRUE(ros::service::call("sdf_tracker/save_mesh", save));
+  EXPECT_TRUE(save.response.success) << save.response.message;
+  const st::TriangleMesh mesh = st::io::readPlyMesh(save.request.path);
+  EXPECT_GT(mesh.triangles.size(), 1000u);
+}
+
+TEST_F(NodeTest, InvalidReconfigureValuesAreRejected) {
+  dynamic_reconfigure::Reconfigure srv;
+  dynamic_reconfigure::DoubleParameter weight;
+  weight.name = "MaxWeight";
+  weight.value = -5.0;
+  srv.request.config.doubles.push_back(weight);
+  ASSERT_TRUE(ros::service::call("sdf_tracker/set_parameters", srv));
+  for (const auto& p : srv.response.config.doubles) {
+    if (p.name == "MaxWeight") {
+      EXPECT_GT(p.value, 0.0) << "the invalid value must not be in force";
+    }
+  }
+  dynamic_reconfigure::StrParameter schedule;
+  schedule.name = "TrackingSchedule";
+  schedule.value = "not a schedule";
+  srv.request.config = dynamic_reconfigure::Config();
+  srv.request.config.strs.push_back(schedule);
+  ASSERT_TRUE(ros::service::call("sdf_tracker/set_parameters", srv));
+  for (const auto& p : srv.response.config.strs) {
+    if (p.name == "TrackingSchedule") {
+      EXPECT_EQ(p.value, "4x12,2x6,1x2");
+    }
+  }
+  // A valid change goes through.
+  weight.value = 32.0;
+  srv.request.config = dynamic_reconfigure::Config();
+  srv.request.config.doubles.push_back(weight);
+  ASSERT_TRUE(ros::service::call("sdf_tracker/set_parameters", srv));
+  for (const auto& p : srv.response.config.doubles) {
+    if (p.name == "MaxWeight") {
+      EXPECT_DOUBLE_EQ(p.value, 32.0);
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "sdf_tracker_node_test");
+  return RUN_ALL_TESTS();
+}
