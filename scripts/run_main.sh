@@ -1,17 +1,23 @@
 #!/usr/bin/env bash
-# The main job, end to end: installs dependencies, builds, generates the default synthetic
-# sequence (unless a TUM-layout folder is given), runs the tracker, prints accuracy and speed,
-# and writes trajectory, mesh, cloud and plot to an output folder.
-#   scripts/run_main.sh [SEQUENCE_DIR] [OUTPUT_DIR] [-- extra sdf_tracker_offline options]
+# The main job, end to end through ROS: installs dependencies, builds, generates the default
+# synthetic sequence (unless a TUM-layout folder is given), converts it to a TUM-style rosbag,
+# plays it through sdf_tracker_node under roslaunch, then prints accuracy and speed and leaves
+# trajectory, mesh, cloud and plot in an output folder.
+#   scripts/run_main.sh [SEQUENCE_DIR] [OUTPUT_DIR]
+# RATE (default 0.3) is the playback rate: slow enough that a 2-core machine drops no frame.
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 sequence="${1:-}"
-output="${2:-$repo/output/main}"
-shift $(( $# > 2 ? 2 : $# ))
-[ "${1:-}" = "--" ] && shift
+output="$(mkdir -p "${2:-$repo/output/main}" && cd "${2:-$repo/output/main}" && pwd)"
+rate="${RATE:-0.3}"
 
 bash "$repo/scripts/install_dependencies.sh"
 bash "$repo/scripts/build.sh"
+export PATH="/usr/bin:$PATH"
+set +u
+# shellcheck disable=SC1091
+source "$repo/build/ws/devel/setup.bash"
+set -u
 bin="$repo/build/ws/devel/lib/sdf_tracker"
 
 if [ -z "$sequence" ]; then
@@ -22,5 +28,19 @@ if [ -z "$sequence" ]; then
   fi
 fi
 
-"$bin/sdf_tracker_offline" --sequence "$sequence" --output "$output" "$@"
-echo "trajectory.txt, mesh.ply, cloud.ply, frames.csv, summary.txt and trajectory.png are in $output"
+bag="$output/sequence.bag"
+"$bin/tum_to_bag" "$sequence" "$bag" | tee "$output/tum_to_bag.log"
+offset=$(grep -oE "shifted by [0-9.]+" "$output/tum_to_bag.log" | awk '{print $3}' || true)
+
+echo "playing the bag through sdf_tracker_node (rate $rate) ..."
+roslaunch sdf_tracker tum_bag.launch bag:="$bag" rate:="$rate" rviz:=false required:=true \
+  trajectory_file:="$output/trajectory.txt" mesh_file:="$output/mesh.ply" cloud_file:="$output/cloud.ply" \
+  > "$output/roslaunch.log" 2>&1 || { tail -n 30 "$output/roslaunch.log"; echo "roslaunch failed"; exit 1; }
+grep -E "processed [0-9]+ frames" "$output/roslaunch.log" | sed -E 's/.*(sdf_tracker: )/\1/; s/\x1b\[[0-9;]*m//g' || true
+rm -f "$bag"  # large and reproducible
+
+if [ -f "$sequence/groundtruth.txt" ]; then
+  "$bin/sdf_tracker_evaluate" --groundtruth "$sequence/groundtruth.txt" --estimate "$output/trajectory.txt" \
+    --estimate-time-offset "${offset:-0}" --plot "$output/trajectory.png" | tee "$output/accuracy.txt"
+fi
+echo "results in $output: trajectory.txt, mesh.ply, cloud.ply, trajectory.png, accuracy.txt, roslaunch.log"

@@ -37,6 +37,9 @@ struct NormalEquations {
 #pragma omp declare reduction(sumEquations : NormalEquations : omp_out += omp_in) \
     initializer(omp_priv = NormalEquations())
 
+/// Below this the field is flat (truncated or unresolved) and the point says nothing.
+constexpr float kMinGradientNorm = 0.2f;
+
 /// Huber weight, eq. (20).
 inline float huberWeight(float residual, float k) {
   const float a = std::fabs(residual);
@@ -61,7 +64,8 @@ std::vector<Eigen::Vector3f> backProjectSubsampled(const DepthImage& depth, cons
 /// (world axes), so rotation and translation stay decoupled wherever the volume's origin lies:
 /// d/dxi D(exp(xi) (p - c) + c) = [ (p - c) x grad D ; grad D ].
 NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_C, const TsdfVolume& volume,
-                                     const Eigen::Isometry3d& T_W_C, float huber_k, const DepthNoiseModel* noise) {
+                                     const Eigen::Isometry3d& T_W_C, float huber_k, const DepthNoiseModel* noise,
+                                     bool normalize_by_gradient) {
   const Eigen::Isometry3f T = T_W_C.cast<float>();
   const Eigen::Vector3f c = T.translation();
   const float dmax = volume.positiveTruncation();
@@ -72,6 +76,14 @@ NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_
     const Eigen::Vector3f p_W = T * points_C[idx];
     FieldSample s;
     if (!volume.sample(p_W, &s) || !(std::fabs(s.distance_m) < dmax)) continue;
+    if (normalize_by_gradient) {
+      // A projective field overstates Euclidean distance by 1/cos(viewing angle) and so does
+      // its gradient norm: dividing by it makes residuals metric and consistent across views.
+      const float gradient_norm = s.gradient.norm();
+      if (gradient_norm < kMinGradientNorm) continue;
+      s.distance_m /= gradient_norm;
+      s.gradient /= gradient_norm;
+    }
     const Eigen::Vector3f lever = p_W - c;
     Vector6d J;
     J.head<3>() = lever.cross(s.gradient).cast<double>();
@@ -174,7 +186,8 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
     const std::vector<Eigen::Vector3f> points_C = backProjectSubsampled(depth, camera, level.stride);
     int iterations = 0;
     for (int it = 1; it <= level.max_iterations; ++it) {
-      last = buildNormalEquations(points_C, volume, T_W_C, huber_k, config_.sensor_weights ? &config_.noise : nullptr);
+      last = buildNormalEquations(points_C, volume, T_W_C, huber_k, config_.sensor_weights ? &config_.noise : nullptr,
+                                  config_.normalize_by_gradient);
       if (last.count < config_.min_valid_points) {
         std::ostringstream msg;
         msg << "only " << last.count << " points at stride " << level.stride

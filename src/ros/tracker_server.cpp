@@ -60,6 +60,8 @@ bool applyNodeOption(NodeOptions* o, const std::string& name, const std::string&
   else if (name == "cloud_rate") o->cloud_rate_hz = toDouble(name, text);
   else if (name == "mesh_rate") o->mesh_rate_hz = toDouble(name, text);
   else if (name == "trajectory_file") o->trajectory_file = text;
+  else if (name == "mesh_file") o->mesh_file = text;
+  else if (name == "cloud_file") o->cloud_file = text;
   else if (name == "LoadVolume") o->load_volume = text;
   else if (name == "OutputTriangles") o->output_triangles = toBool(name, text);
   else if (name == "OutputVolume") o->output_volume = toBool(name, text);
@@ -205,8 +207,16 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
 
 TrackerServer::~TrackerServer() {
   std::lock_guard<std::mutex> lock(mutex_);
+  if (!frame_ms_.empty()) {
+    std::sort(frame_ms_.begin(), frame_ms_.end());
+    const double median_ms = frame_ms_[frame_ms_.size() / 2];
+    ROS_INFO("sdf_tracker: processed %u frames, dropped %u; median %.1f ms per frame (%.1f frames/s)", frames_processed_,
+             frames_dropped_, median_ms, 1000.0 / median_ms);
+  }
   try {
     writeTrajectory();
+    if (!options_.mesh_file.empty()) st::io::writePly(options_.mesh_file, st::extractMesh(pipeline_->volume()));
+    if (!options_.cloud_file.empty()) st::io::writePly(options_.cloud_file, st::extractSurfaceCloud(pipeline_->volume()));
     if (options_.output_triangles) {
       st::io::writeObj(outputPath("", "triangles.obj"), st::extractMesh(pipeline_->volume()));
     }
@@ -275,6 +285,8 @@ void TrackerServer::depthCallback(const sensor_msgs::ImageConstPtr& image,
   last_stamp_ = image->header.stamp;
 
   const st::FrameReport report = pipeline_->processFrame(depth, camera);
+  ++frames_processed_;
+  frame_ms_.push_back(report.tracking_ms + report.fusion_ms);
   const st::TrackResult& t = report.track;
   status.status = static_cast<uint8_t>(t.status);
   status.status_text = statusText(t);

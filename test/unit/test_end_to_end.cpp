@@ -56,7 +56,7 @@ TEST_P(SyntheticSequence, NoisyDeskLikeMotionIsTrackedWithinTwoAndAHalfMillimetr
 }
 
 INSTANTIATE_TEST_SUITE_P(Motions, SyntheticSequence,
-                         ::testing::Values(synthetic::Motion::kDesk, synthetic::Motion::kLoop),
+                         ::testing::Values(synthetic::Motion::kDesk, synthetic::Motion::kSlow),
                          [](const ::testing::TestParamInfo<synthetic::Motion>& motion) {
                            return synthetic::toString(motion.param);
                          });

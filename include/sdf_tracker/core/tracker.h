@@ -24,9 +24,13 @@ struct TrackerConfig {
   /// Huber threshold k = huber_coefficient * Dmax (RobustStatisticCoefficient).
   double huber_coefficient = 0.02;
   /// Weight each point by the inverse variance of its depth (noise model) on top of Huber, and
-  /// widen its Huber threshold by the same noise ratio.
-  bool sensor_weights = true;
+  /// widen its Huber threshold by the same noise ratio. Off: the paper's plain IRLS.
+  bool sensor_weights = false;
   DepthNoiseModel noise;
+  /// Divide each residual and its gradient by the gradient norm, turning projective distances
+  /// (too long by 1/cos of the angle between ray and surface normal) into metric ones. Off: the
+  /// paper's plain D(Tp).
+  bool normalize_by_gradient = false;
   /// alpha = regularization * (iteration within the level, from 1), eq. (21).
   double regularization = 0.01;
   /// A level ends early when |delta xi| falls below this (ConvergenceCondition).

@@ -33,6 +33,8 @@ struct NodeOptions {
   double cloud_rate_hz = 1.0;
   double mesh_rate_hz = 0.2;
   std::string trajectory_file;
+  std::string mesh_file;   ///< when set, mesh.ply-style PLY written at shut-down
+  std::string cloud_file;  ///< when set, surface cloud PLY written at shut-down
   std::string load_volume = "none";  ///< LoadVolume
   bool output_triangles = false;     ///< OutputTriangles: triangles.obj at shut-down
   bool output_volume = false;        ///< OutputVolume: sdf_volume.vti at shut-down
@@ -81,6 +83,8 @@ class TrackerServer {
   ros::Time last_stamp_;
   std::optional<uint32_t> last_seq_;
   uint32_t frames_dropped_ = 0;
+  uint32_t frames_processed_ = 0;
+  std::vector<double> frame_ms_;
   bool warned_intrinsics_ = false;
 
   image_transport::ImageTransport it_;
