@@ -36,7 +36,11 @@ echo "playing the bag through sdf_tracker_node (rate $rate) ..."
 roslaunch sdf_tracker tum_bag.launch bag:="$bag" rate:="$rate" rviz:=false required:=true \
   trajectory_file:="$output/trajectory.txt" mesh_file:="$output/mesh.ply" cloud_file:="$output/cloud.ply" \
   > "$output/roslaunch.log" 2>&1 || { tail -n 30 "$output/roslaunch.log"; echo "roslaunch failed"; exit 1; }
-grep -E "processed [0-9]+ frames" "$output/roslaunch.log" | sed -E 's/.*(sdf_tracker: )/\1/; s/\x1b\[[0-9;]*m//g' || true
+frames=$(grep -cvE '^\s*(#|$)' "$sequence/depth.txt")
+tracked=$(grep -cvE '^\s*(#|$)' "$output/trajectory.txt")
+echo "the node processed $tracked of $frames frames ($((frames - tracked)) dropped)"
+grep -aoE "[0-9.]+ ms per frame on average \([0-9.]+ frames/s\)" "$output/roslaunch.log" | tail -n 1 \
+  | sed 's/^/speed: /' || true
 rm -f "$bag"  # large and reproducible
 
 if [ -f "$sequence/groundtruth.txt" ]; then

@@ -207,12 +207,6 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
 
 TrackerServer::~TrackerServer() {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (!frame_ms_.empty()) {
-    std::sort(frame_ms_.begin(), frame_ms_.end());
-    const double median_ms = frame_ms_[frame_ms_.size() / 2];
-    ROS_INFO("sdf_tracker: processed %u frames, dropped %u; median %.1f ms per frame (%.1f frames/s)", frames_processed_,
-             frames_dropped_, median_ms, 1000.0 / median_ms);
-  }
   try {
     writeTrajectory();
     if (!options_.mesh_file.empty()) st::io::writePly(options_.mesh_file, st::extractMesh(pipeline_->volume()));
@@ -286,7 +280,10 @@ void TrackerServer::depthCallback(const sensor_msgs::ImageConstPtr& image,
 
   const st::FrameReport report = pipeline_->processFrame(depth, camera);
   ++frames_processed_;
-  frame_ms_.push_back(report.tracking_ms + report.fusion_ms);
+  sum_frame_ms_ += report.tracking_ms + report.fusion_ms;
+  ROS_INFO_THROTTLE(5.0, "sdf_tracker: %u frames processed, %u dropped, %.1f ms per frame on average (%.1f frames/s)",
+                    frames_processed_, frames_dropped_, sum_frame_ms_ / frames_processed_,
+                    1000.0 * frames_processed_ / sum_frame_ms_);
   const st::TrackResult& t = report.track;
   status.status = static_cast<uint8_t>(t.status);
   status.status_text = statusText(t);

@@ -84,7 +84,7 @@ class TrackerServer {
   std::optional<uint32_t> last_seq_;
   uint32_t frames_dropped_ = 0;
   uint32_t frames_processed_ = 0;
-  std::vector<double> frame_ms_;
+  double sum_frame_ms_ = 0.0;
   bool warned_intrinsics_ = false;
 
   image_transport::ImageTransport it_;
