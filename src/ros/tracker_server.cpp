@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include <geometry_msgs/PoseStamped.h>
+#include <image_transport/camera_common.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <visualization_msgs/Marker.h>
 
@@ -176,7 +177,24 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
 
   const std::string depth_topic =
       options_.camera_name + (options_.depth_registered ? "/depth_registered/image" : "/depth/image");
-  depth_sub_ = it_.subscribeCamera(depth_topic, 1, &TrackerServer::depthCallback, this);
+  if (options_.intrinsics_from_parameters) {
+    depth_only_sub_ = it_.subscribe(depth_topic, 1, [this](const sensor_msgs::ImageConstPtr& image) {
+      depthCallback(image, nullptr);
+    });
+    depth_topic_ = depth_only_sub_.getTopic();
+  } else {
+    depth_sub_ = it_.subscribeCamera(depth_topic, 1, &TrackerServer::depthCallback, this);
+    depth_topic_ = depth_sub_.getTopic();
+  }
+  info_topic_ = image_transport::getCameraInfoTopic(depth_topic_);
+  info_watch_sub_ = nh_.subscribe<sensor_msgs::CameraInfo>(
+      info_topic_, 1, [this](const sensor_msgs::CameraInfoConstPtr& info) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        last_info_wall_ = ros::WallTime::now();
+        last_info_ = info;
+      });
+  last_frame_wall_ = ros::WallTime::now();
+  watchdog_timer_ = nh_.createTimer(ros::Duration(2.0), &TrackerServer::checkInputs, this);
   denoised_pub_ = it_.advertise(options_.camera_name + "/depth/image_denoised", 1);
   pose_pub_ = pnh_.advertise<geometry_msgs::PoseStamped>("pose", 10);
   path_pub_ = pnh_.advertise<nav_msgs::Path>("path", 1, true);
@@ -200,8 +218,8 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
       [this](sdf_tracker::SdfTrackerConfig& config, uint32_t level) { reconfigure(config, level); });
 
   const auto& v = settings_.pipeline.volume;
-  ROS_INFO("sdf_tracker: listening on %s (%s); grid %dx%dx%d of %.3f m; intrinsics from %s",
-           depth_sub_.getTopic().c_str(), depth_sub_.getInfoTopic().c_str(), v.dims.x(), v.dims.y(), v.dims.z(),
+  ROS_INFO("sdf_tracker: listening on %s (%s); grid %dx%dx%d of %.3f m; intrinsics from %s", depth_topic_.c_str(),
+           info_topic_.c_str(), v.dims.x(), v.dims.y(), v.dims.z(),
            v.voxel_size_m, options_.intrinsics_from_parameters ? "parameters" : "camera_info");
 }
 
@@ -230,10 +248,28 @@ void TrackerServer::writeTrajectory() {
   ROS_INFO("sdf_tracker: wrote %zu poses to %s", trajectory_.size(), options_.trajectory_file.c_str());
 }
 
-void TrackerServer::depthCallback(const sensor_msgs::ImageConstPtr& image,
-                                  const sensor_msgs::CameraInfoConstPtr& info) {
+void TrackerServer::checkInputs(const ros::TimerEvent&) {
+  // Images without a matching camera_info never reach depthCallback: say so instead of idling.
+  const ros::WallTime now = ros::WallTime::now();
   std::lock_guard<std::mutex> lock(mutex_);
-  const std::string& topic = depth_sub_.getTopic();
+  if (options_.intrinsics_from_parameters || (now - last_frame_wall_).toSec() < 3.0) return;
+  const uint32_t publishers = depth_sub_.getNumPublishers();
+  if (publishers == 0) return;
+  if (last_info_wall_.isZero() || (now - last_info_wall_).toSec() > 3.0) {
+    ROS_ERROR_THROTTLE(10.0, "sdf_tracker: %s has a publisher but no camera_info arrives on %s; frames cannot be "
+                       "used (publish camera_info, or set FocalLengthX/Y and CenterPointX/Y)",
+                       depth_topic_.c_str(), info_topic_.c_str());
+  } else {
+    ROS_WARN_THROTTLE(10.0, "sdf_tracker: no frame for %.0f s although %s and %s have publishers: are their stamps "
+                      "equal?", (now - last_frame_wall_).toSec(), depth_topic_.c_str(), info_topic_.c_str());
+  }
+}
+
+void TrackerServer::depthCallback(const sensor_msgs::ImageConstPtr& image,
+                                  const sensor_msgs::CameraInfoConstPtr& synchronised_info) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  last_frame_wall_ = ros::WallTime::now();
+  const std::string& topic = depth_topic_;
   sdf_tracker::TrackingStatus status;
   status.header = image->header;
   if (last_seq_ && image->header.seq > *last_seq_ + 1) frames_dropped_ += image->header.seq - *last_seq_ - 1;
@@ -253,15 +289,16 @@ void TrackerServer::depthCallback(const sensor_msgs::ImageConstPtr& image,
     depth = toDepthImage(*image);
     if (options_.intrinsics_from_parameters) {
       camera = settings_.camera();
-      if (!warned_intrinsics_ && info->K[0] > 0.0 &&
+      const sensor_msgs::CameraInfoConstPtr info = last_info_;
+      if (!warned_intrinsics_ && info && info->K[0] > 0.0 &&
           (std::abs(info->K[0] - camera.fx) > 1e-3 || std::abs(info->K[2] - camera.cx) > 1e-3)) {
         ROS_WARN("sdf_tracker: FocalLength/CenterPoint parameters (fx %.2f, cx %.2f) disagree with %s (fx %.2f, "
                  "cx %.2f); using the parameters",
-                 camera.fx, camera.cx, depth_sub_.getInfoTopic().c_str(), info->K[0], info->K[2]);
+                 camera.fx, camera.cx, info_topic_.c_str(), info->K[0], info->K[2]);
         warned_intrinsics_ = true;
       }
     } else {
-      camera = toCamera(*info);
+      camera = toCamera(*synchronised_info);
     }
   } catch (const std::invalid_argument& e) {
     return drop(e.what());

@@ -59,7 +59,9 @@ class TrackerServer {
   ~TrackerServer();
 
  private:
-  void depthCallback(const sensor_msgs::ImageConstPtr& image, const sensor_msgs::CameraInfoConstPtr& info);
+  /// `synchronised_info` is null when the intrinsics come from parameters.
+  void depthCallback(const sensor_msgs::ImageConstPtr& image, const sensor_msgs::CameraInfoConstPtr& synchronised_info);
+  void checkInputs(const ros::TimerEvent&);
   void publishPose(const std_msgs::Header& header, const Eigen::Isometry3d& T_W_C, const std::string& camera_frame);
   void publishCloud(const ros::TimerEvent&);
   void publishMesh(const ros::TimerEvent&);
@@ -88,7 +90,13 @@ class TrackerServer {
   bool warned_intrinsics_ = false;
 
   image_transport::ImageTransport it_;
-  image_transport::CameraSubscriber depth_sub_;
+  image_transport::CameraSubscriber depth_sub_;  ///< image + camera_info, synchronised
+  image_transport::Subscriber depth_only_sub_;    ///< image alone, when intrinsics are parameters
+  ros::Subscriber info_watch_sub_;                ///< notes camera_info arrivals for the watchdog
+  ros::Timer watchdog_timer_;
+  std::string depth_topic_, info_topic_;
+  ros::WallTime last_frame_wall_, last_info_wall_;
+  sensor_msgs::CameraInfoConstPtr last_info_;  ///< latest camera_info, to compare with parameters
   image_transport::Publisher denoised_pub_;
   ros::Publisher pose_pub_, path_pub_, status_pub_, cloud_pub_, mesh_pub_;
   ros::ServiceServer reset_srv_, save_mesh_srv_, save_volume_srv_, load_volume_srv_;
