@@ -56,7 +56,6 @@ size_t Integrator::integrate(const DepthImage& depth, const PinholeCamera& camer
   const int width = camera.width, height = camera.height;
   // Moving one voxel along x moves the point in the camera frame by this much.
   const Eigen::Vector3f step_x_C = T_C_W.linear().col(0) * volume->voxelSize();
-  Voxel* voxels = volume->data();
   const float* depth_m = depth.data();
   // Beyond the furthest measurement (plus the negative band) every voxel is too far behind.
   float max_depth_m = 0.0f;
@@ -67,49 +66,52 @@ size_t Integrator::integrate(const DepthImage& depth, const PinholeCamera& camer
   const double z_far = max_depth_m - dmin;
   const double z_near = 1e-6;
 
-  size_t updated = 0;
+  return volume->withStorage([&](auto* voxels, const auto& codec) {
+    size_t updated = 0;
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : updated)
-  for (int k = 0; k < dims.z(); ++k) {
-    for (int j = 0; j < dims.y(); ++j) {
-      const Eigen::Vector3f p0_C = T_C_W * volume->position(0, j, k);
-      // Only voxels of this row inside the viewing frustum can change: each frustum plane is a
-      // linear constraint on i. The per-voxel tests below stay; this only skips the rest.
-      const Eigen::Vector3d a = p0_C.cast<double>(), b = step_x_C.cast<double>();
-      double lo = 0.0, hi = dims.x() - 1.0;
-      clipToHalfLine(a.z() - z_near, b.z(), &lo, &hi);
-      clipToHalfLine(z_far - a.z(), -b.z(), &lo, &hi);
-      clipToHalfLine(fx * a.x() + (cx + 0.5) * a.z(), fx * b.x() + (cx + 0.5) * b.z(), &lo, &hi);
-      clipToHalfLine((width - 0.5 - cx) * a.z() - fx * a.x(), (width - 0.5 - cx) * b.z() - fx * b.x(), &lo, &hi);
-      clipToHalfLine(fy * a.y() + (cy + 0.5) * a.z(), fy * b.y() + (cy + 0.5) * b.z(), &lo, &hi);
-      clipToHalfLine((height - 0.5 - cy) * a.z() - fy * a.y(), (height - 0.5 - cy) * b.z() - fy * b.y(), &lo, &hi);
-      if (lo > hi) continue;
-      const int i_begin = std::max(0, static_cast<int>(std::ceil(lo)) - 1);
-      const int i_end = std::min(dims.x(), static_cast<int>(std::floor(hi)) + 2);
-      Eigen::Vector3f p_C = p0_C + static_cast<float>(i_begin) * step_x_C;
-      Voxel* row = voxels + volume->index(0, j, k);
-      for (int i = i_begin; i < i_end; ++i, p_C += step_x_C) {
-        if (p_C.z() <= 0.0f) continue;
-        const float inv_z = 1.0f / p_C.z();
-        // Nearest pixel; the range test comes before the conversion so rounding is exact.
-        const float u_shifted = fx * p_C.x() * inv_z + cx + 0.5f;
-        const float v_shifted = fy * p_C.y() * inv_z + cy + 0.5f;
-        if (!(u_shifted >= 0.0f && v_shifted >= 0.0f && u_shifted < width && v_shifted < height)) continue;
-        const int u = static_cast<int>(u_shifted), v = static_cast<int>(v_shifted);
-        const float z_measured = depth_m[static_cast<size_t>(v) * width + u];
-        if (!DepthImage::isMeasurement(z_measured)) continue;
-        const float d = z_measured - p_C.z();
-        if (d < dmin) continue;
-        const float d_clamped = std::min(d, dmax);
-        const float w_new = sensor_weights ? noise.weight(z_measured) : 1.0f;
-        Voxel& voxel = row[i];
-        const float w_sum = voxel.weight + w_new;
-        voxel.distance_m = (voxel.distance_m * voxel.weight + d_clamped * w_new) / w_sum;
-        voxel.weight = std::min(w_sum, wmax);
-        ++updated;
+    for (int k = 0; k < dims.z(); ++k) {
+      for (int j = 0; j < dims.y(); ++j) {
+        const Eigen::Vector3f p0_C = T_C_W * volume->position(0, j, k);
+        // Only voxels of this row inside the viewing frustum can change: each frustum plane is a
+        // linear constraint on i. The per-voxel tests below stay; this only skips the rest.
+        const Eigen::Vector3d a = p0_C.cast<double>(), b = step_x_C.cast<double>();
+        double lo = 0.0, hi = dims.x() - 1.0;
+        clipToHalfLine(a.z() - z_near, b.z(), &lo, &hi);
+        clipToHalfLine(z_far - a.z(), -b.z(), &lo, &hi);
+        clipToHalfLine(fx * a.x() + (cx + 0.5) * a.z(), fx * b.x() + (cx + 0.5) * b.z(), &lo, &hi);
+        clipToHalfLine((width - 0.5 - cx) * a.z() - fx * a.x(), (width - 0.5 - cx) * b.z() - fx * b.x(), &lo, &hi);
+        clipToHalfLine(fy * a.y() + (cy + 0.5) * a.z(), fy * b.y() + (cy + 0.5) * b.z(), &lo, &hi);
+        clipToHalfLine((height - 0.5 - cy) * a.z() - fy * a.y(), (height - 0.5 - cy) * b.z() - fy * b.y(), &lo, &hi);
+        if (lo > hi) continue;
+        const int i_begin = std::max(0, static_cast<int>(std::ceil(lo)) - 1);
+        const int i_end = std::min(dims.x(), static_cast<int>(std::floor(hi)) + 2);
+        Eigen::Vector3f p_C = p0_C + static_cast<float>(i_begin) * step_x_C;
+        auto* row = voxels + volume->index(0, j, k);
+        for (int i = i_begin; i < i_end; ++i, p_C += step_x_C) {
+          if (p_C.z() <= 0.0f) continue;
+          const float inv_z = 1.0f / p_C.z();
+          // Nearest pixel; the range test comes before the conversion so rounding is exact.
+          const float u_shifted = fx * p_C.x() * inv_z + cx + 0.5f;
+          const float v_shifted = fy * p_C.y() * inv_z + cy + 0.5f;
+          if (!(u_shifted >= 0.0f && v_shifted >= 0.0f && u_shifted < width && v_shifted < height)) continue;
+          const int u = static_cast<int>(u_shifted), v = static_cast<int>(v_shifted);
+          const float z_measured = depth_m[static_cast<size_t>(v) * width + u];
+          if (!DepthImage::isMeasurement(z_measured)) continue;
+          const float d = z_measured - p_C.z();
+          if (d < dmin) continue;
+          const float d_clamped = std::min(d, dmax);
+          const float w_new = sensor_weights ? noise.weight(z_measured) : 1.0f;
+          Voxel voxel = codec.decode(row[i]);
+          const float w_sum = voxel.weight + w_new;
+          voxel.distance_m = (voxel.distance_m * voxel.weight + d_clamped * w_new) / w_sum;
+          voxel.weight = std::min(w_sum, wmax);
+          row[i] = codec.encode(voxel);
+          ++updated;
+        }
       }
     }
-  }
-  return updated;
+    return updated;
+  });
 }
 
 }  // namespace sdf_tracker

@@ -258,7 +258,8 @@ void writeVti(const std::string& path, const TsdfVolume& volume) {
   std::vector<float> buffer(volume.voxelCount());
   for (int field = 0; field < 2; ++field) {
     for (size_t i = 0; i < buffer.size(); ++i) {
-      buffer[i] = field == 0 ? volume.data()[i].distance_m : volume.data()[i].weight;
+      const Voxel v = volume.voxel(i);
+      buffer[i] = field == 0 ? v.distance_m : v.weight;
     }
     writeBinary(s, array_bytes);
     s.write(reinterpret_cast<const char*>(buffer.data()), static_cast<std::streamsize>(array_bytes));
@@ -267,7 +268,7 @@ void writeVti(const std::string& path, const TsdfVolume& volume) {
   out.commit();
 }
 
-TsdfVolume readVti(const std::string& path) {
+TsdfVolume readVti(const std::string& path, bool compact_voxels) {
   const std::string text = readWholeFile(path);
   if (text.find("<VTKFile type=\"ImageData\"") == std::string::npos) fail(path, "not a VTK ImageData (.vti) file");
   const size_t data_marker = text.find("<AppendedData encoding=\"raw\">");
@@ -281,6 +282,7 @@ TsdfVolume readVti(const std::string& path) {
   config.dims = Eigen::Vector3i(extent[1] - extent[0] + 1, extent[3] - extent[2] + 1, extent[5] - extent[4] + 1);
   config.origin_W = parseNumbers<double, 3>(xmlAttribute(header, "Origin", path), "Origin", path);
   config.voxel_size_m = spacing.x();
+  config.compact_voxels = compact_voxels;
   if (std::fabs(spacing.y() - spacing.x()) > 1e-9 || std::fabs(spacing.z() - spacing.x()) > 1e-9) {
     fail(path, "voxels must be cubic (Spacing " + xmlAttribute(header, "Spacing", path) + ")");
   }
@@ -292,8 +294,8 @@ TsdfVolume readVti(const std::string& path) {
   const auto violations = config.validate();
   if (!violations.empty()) fail(path, "invalid volume geometry: " + violations.front());
 
-  TsdfVolume volume(config);
-  const uint64_t array_bytes = volume.voxelCount() * sizeof(float);
+  std::vector<Voxel> voxels(static_cast<size_t>(config.dims.x()) * config.dims.y() * config.dims.z());
+  const uint64_t array_bytes = voxels.size() * sizeof(float);
   size_t cursor = text.find('_', data_marker);
   if (cursor == std::string::npos) fail(path, "AppendedData has no '_' marker");
   ++cursor;
@@ -308,17 +310,19 @@ TsdfVolume readVti(const std::string& path) {
     }
     if (cursor + bytes > text.size()) fail(path, "file is truncated inside the voxel data");
     const float* values = reinterpret_cast<const float*>(text.data() + cursor);
-    for (size_t i = 0; i < volume.voxelCount(); ++i) {
+    for (size_t i = 0; i < voxels.size(); ++i) {
       float value;
       std::memcpy(&value, values + i, sizeof(float));
       if (!std::isfinite(value) || (field == 1 && value < 0.0f)) {
         fail(path, std::string(field == 0 ? "distance" : "weight") + " of voxel " + std::to_string(i) +
                        " is invalid (" + std::to_string(value) + ")");
       }
-      (field == 0 ? volume.data()[i].distance_m : volume.data()[i].weight) = value;
+      (field == 0 ? voxels[i].distance_m : voxels[i].weight) = value;
     }
     cursor += bytes;
   }
+  TsdfVolume volume(config);
+  for (size_t i = 0; i < voxels.size(); ++i) volume.setVoxel(i, voxels[i]);
   return volume;
 }
 

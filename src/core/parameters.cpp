@@ -112,6 +112,8 @@ std::vector<ParameterSpec> buildTable() {
                    [](auto& s) -> auto& { return s.pipeline.tracker.sensor_weights; }));
   t.push_back(flag("NormalizeResiduals", "divide residuals by the field's gradient norm (metric distances)", true,
                    [](auto& s) -> auto& { return s.pipeline.tracker.normalize_by_gradient; }));
+  t.push_back(flag("CompactVoxels", "4-byte voxels (half the memory; distance and weight quantised)", false,
+                   [](auto& s) -> auto& { return s.pipeline.volume.compact_voxels; }));
   t.push_back(numeric<int>("MinValidPoints", "fewer tracked points than this: too_few_points", true,
                            [](auto& s) -> auto& { return s.pipeline.tracker.min_valid_points; }));
   t.push_back(numeric<double>("MinInverseCondition", "below this the geometry is degenerate", true,

@@ -38,6 +38,11 @@ std::vector<std::string> PipelineConfig::validate() const {
     v.requireInRange("initial_camera_in_grid[" + std::to_string(axis) + "]", initial_camera_in_grid[axis], -1.0, 2.0);
   }
   v.requireNonNegative("min_pose_change_to_fuse", min_pose_change_to_fuse);
+  if (volume.compact_voxels) {
+    v.require(integrator.max_weight <= VoxelCodec<CompactVoxel>::kMaxWeight,
+              "integrator.max_weight must be <= " + std::to_string(VoxelCodec<CompactVoxel>::kMaxWeight) +
+                  " with compact voxels (got " + std::to_string(integrator.max_weight) + ")");
+  }
   v.requireNonNegative("reset_after_failures", reset_after_failures);
   if (volume.positive_truncation_m > 0.0 && integrator.negative_truncation_m < 0.0) {
     // The tracker needs samples on both sides of the surface: at least one voxel each way.

@@ -42,13 +42,13 @@ SurfaceCloud extractSurfaceCloud(const TsdfVolume& volume) {
     SurfaceCloud& slice = slices[k];
     for (int j = 0; j < dims.y(); ++j) {
       for (int i = 0; i < dims.x(); ++i) {
-        const Voxel& a = volume.at(i, j, k);
+        const Voxel a = volume.voxel(i, j, k);
         if (a.weight <= 0.0f) continue;
         for (int axis = 0; axis < 3; ++axis) {
           Eigen::Vector3i n(i, j, k);
           n[axis] += 1;
           if (n[axis] >= dims[axis]) continue;
-          const Voxel& b = volume.at(n.x(), n.y(), n.z());
+          const Voxel b = volume.voxel(n.x(), n.y(), n.z());
           if (b.weight <= 0.0f || (a.distance_m < 0.0f) == (b.distance_m < 0.0f)) continue;
           const float t = zeroFraction(a.distance_m, b.distance_m);
           Eigen::Vector3f p_W = volume.position(i, j, k);
@@ -83,7 +83,7 @@ TriangleMesh extractMesh(const TsdfVolume& volume) {
         for (int c = 0; c < 8 && observed; ++c) {
           const Eigen::Vector3i o = cornerOffset(c);
           index[c] = volume.index(i + o.x(), j + o.y(), k + o.z());
-          const Voxel& voxel = volume.data()[index[c]];
+          const Voxel voxel = volume.voxel(index[c]);
           observed = voxel.weight > 0.0f;
           d[c] = voxel.distance_m;
           negatives += d[c] < 0.0f;

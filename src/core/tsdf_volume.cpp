@@ -34,10 +34,20 @@ TsdfVolume::TsdfVolume(const VolumeConfig& config) : config_(config) {
   origin_ = config.origin_W.cast<float>();
   stride_y_ = static_cast<size_t>(config.dims.x());
   stride_z_ = stride_y_ * config.dims.y();
-  voxels_.assign(stride_z_ * config.dims.z(), Voxel{positive_truncation_, 0.0f});
+  voxel_count_ = stride_z_ * config.dims.z();
+  clear();
 }
 
-void TsdfVolume::clear() { std::fill(voxels_.begin(), voxels_.end(), Voxel{positive_truncation_, 0.0f}); }
+void TsdfVolume::clear() {
+  const Voxel unseen{positive_truncation_, 0.0f};
+  if (compact()) {
+    std::vector<Voxel>().swap(voxels_);
+    compact_.assign(voxel_count_, VoxelCodec<CompactVoxel>(positive_truncation_).encode(unseen));
+  } else {
+    std::vector<CompactVoxel>().swap(compact_);
+    voxels_.assign(voxel_count_, unseen);
+  }
+}
 
 bool TsdfVolume::locate(const Eigen::Vector3f& p_W, size_t* base, Eigen::Vector3f* frac) const {
   const Eigen::Vector3f g = toLattice(p_W);
@@ -53,18 +63,23 @@ bool TsdfVolume::locate(const Eigen::Vector3f& p_W, size_t* base, Eigen::Vector3
 }
 
 bool TsdfVolume::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
+  return withStorage([&](const auto* voxels, const auto& codec) { return sampleFrom(voxels, codec, p_W, out); });
+}
+
+template <typename Stored>
+bool TsdfVolume::sampleFrom(const Stored* v, const VoxelCodec<Stored>& codec, const Eigen::Vector3f& p_W,
+                            FieldSample* out) const {
   size_t b;
   Eigen::Vector3f f;
   if (!locate(p_W, &b, &f)) return false;
-  const Voxel* v = voxels_.data();
-  const Voxel& v000 = v[b];
-  const Voxel& v100 = v[b + 1];
-  const Voxel& v010 = v[b + stride_y_];
-  const Voxel& v110 = v[b + stride_y_ + 1];
-  const Voxel& v001 = v[b + stride_z_];
-  const Voxel& v101 = v[b + stride_z_ + 1];
-  const Voxel& v011 = v[b + stride_z_ + stride_y_];
-  const Voxel& v111 = v[b + stride_z_ + stride_y_ + 1];
+  const Voxel v000 = codec.decode(v[b]);
+  const Voxel v100 = codec.decode(v[b + 1]);
+  const Voxel v010 = codec.decode(v[b + stride_y_]);
+  const Voxel v110 = codec.decode(v[b + stride_y_ + 1]);
+  const Voxel v001 = codec.decode(v[b + stride_z_]);
+  const Voxel v101 = codec.decode(v[b + stride_z_ + 1]);
+  const Voxel v011 = codec.decode(v[b + stride_z_ + stride_y_]);
+  const Voxel v111 = codec.decode(v[b + stride_z_ + stride_y_ + 1]);
   if (v000.weight <= 0.0f || v100.weight <= 0.0f || v010.weight <= 0.0f || v110.weight <= 0.0f ||
       v001.weight <= 0.0f || v101.weight <= 0.0f || v011.weight <= 0.0f || v111.weight <= 0.0f) {
     return false;

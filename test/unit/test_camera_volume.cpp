@@ -55,8 +55,8 @@ TEST(TsdfVolume, IndexingIsXFastestAndPositionsFollowTheOrigin) {
   EXPECT_EQ(volume.index(0, 0, 1), 20u);
   EXPECT_EQ(volume.index(3, 4, 5), 119u);
   EXPECT_TRUE(volume.position(2, 1, 3).isApprox(Eigen::Vector3f(2.0f, 2.5f, 4.5f)));
-  EXPECT_EQ(volume.at(3, 4, 5).weight, 0.0f);
-  EXPECT_FLOAT_EQ(volume.at(3, 4, 5).distance_m, static_cast<float>(config.positive_truncation_m));
+  EXPECT_EQ(volume.voxel(3, 4, 5).weight, 0.0f);
+  EXPECT_FLOAT_EQ(volume.voxel(3, 4, 5).distance_m, static_cast<float>(config.positive_truncation_m));
 }
 
 TEST(TsdfVolume, RejectsInvalidGeometryNamingEachField) {
@@ -84,7 +84,7 @@ TsdfVolume filledVolume(Field f) {
   TsdfVolume volume(config);
   for (int k = 0; k < 40; ++k)
     for (int j = 0; j < 40; ++j)
-      for (int i = 0; i < 40; ++i) volume.at(i, j, k) = Voxel{f(volume.position(i, j, k)), 1.0f};
+      for (int i = 0; i < 40; ++i) volume.setVoxel(i, j, k, Voxel{f(volume.position(i, j, k)), 1.0f});
   return volume;
 }
 
@@ -115,6 +115,55 @@ TEST(TsdfVolume, TrilinearValueAndGradientApproximateAnAnalyticSphere) {
   }
 }
 
+TEST(TsdfVolume, CompactVoxelsHalveMemoryAndQuantiseFinely) {
+  VolumeConfig config;
+  config.dims = Eigen::Vector3i(20, 20, 20);
+  config.voxel_size_m = 0.05;
+  config.positive_truncation_m = 0.1;
+  TsdfVolume full(config);
+  config.compact_voxels = true;
+  TsdfVolume compact(config);
+  EXPECT_EQ(compact.memoryBytes() * 2, full.memoryBytes());
+  EXPECT_EQ(compact.voxel(3, 3, 3).weight, 0.0f);
+  EXPECT_NEAR(compact.voxel(3, 3, 3).distance_m, 0.1f, 1e-5f);
+  // One distance step is 2 Dmax / 32767, one weight step 1/256; a tiny weight still counts.
+  const float distance_step = 0.2f / 32767.0f;
+  for (const Voxel v : {Voxel{0.0123456f, 3.3f}, Voxel{-0.0987f, 63.9f}, Voxel{0.05f, 0.001f}}) {
+    compact.setVoxel(5, 6, 7, v);
+    EXPECT_NEAR(compact.voxel(5, 6, 7).distance_m, v.distance_m, distance_step);
+    EXPECT_NEAR(compact.voxel(5, 6, 7).weight, v.weight, 1.0f / 256.0f);
+    EXPECT_GT(compact.voxel(5, 6, 7).weight, 0.0f);
+  }
+  // Out-of-range values saturate instead of wrapping around.
+  compact.setVoxel(1, 1, 1, Voxel{-5.0f, 1000.0f});
+  EXPECT_NEAR(compact.voxel(1, 1, 1).distance_m, -0.2f, distance_step);
+  EXPECT_NEAR(compact.voxel(1, 1, 1).weight, 65535.0f / 256.0f, 1e-3f);
+}
+
+TEST(TsdfVolume, CompactTrilinearSamplingMatchesTheFloatGrid) {
+  const Eigen::Vector3f n = Eigen::Vector3f(0.3f, -1.0f, 0.7f).normalized();
+  VolumeConfig config;
+  config.dims = Eigen::Vector3i(20, 20, 20);
+  config.voxel_size_m = 0.01;
+  config.positive_truncation_m = 0.1;
+  TsdfVolume full(config);
+  config.compact_voxels = true;
+  TsdfVolume compact(config);
+  for (int k = 0; k < 20; ++k)
+    for (int j = 0; j < 20; ++j)
+      for (int i = 0; i < 20; ++i) {
+        const Voxel v{n.dot(full.position(i, j, k)) - 0.1f, 2.0f};
+        full.setVoxel(i, j, k, v);
+        compact.setVoxel(i, j, k, v);
+      }
+  FieldSample a, b;
+  const Eigen::Vector3f p(0.083f, 0.121f, 0.0557f);
+  ASSERT_TRUE(full.sample(p, &a));
+  ASSERT_TRUE(compact.sample(p, &b));
+  EXPECT_NEAR(a.distance_m, b.distance_m, 1e-5f);
+  EXPECT_LT((a.gradient - b.gradient).norm(), 2e-3f);
+}
+
 TEST(TsdfVolume, SamplingRejectsUnobservedOutsideAndNaN) {
   VolumeConfig config;
   config.dims = Eigen::Vector3i(10, 10, 10);
@@ -124,7 +173,7 @@ TEST(TsdfVolume, SamplingRejectsUnobservedOutsideAndNaN) {
   EXPECT_FALSE(volume.sample(Eigen::Vector3f(0.5f, 0.5f, 0.5f), &s)) << "unobserved voxels must not be sampled";
   for (int k = 0; k < 10; ++k)
     for (int j = 0; j < 10; ++j)
-      for (int i = 0; i < 10; ++i) volume.at(i, j, k).weight = 1.0f;
+      for (int i = 0; i < 10; ++i) volume.setVoxel(i, j, k, Voxel{volume.voxel(i, j, k).distance_m, 1.0f});
   EXPECT_TRUE(volume.sample(Eigen::Vector3f(0.5f, 0.5f, 0.5f), &s));
   EXPECT_FALSE(volume.sample(Eigen::Vector3f(-0.01f, 0.5f, 0.5f), &s));
   EXPECT_FALSE(volume.sample(Eigen::Vector3f(0.5f, 0.95f, 0.5f), &s));

@@ -39,7 +39,7 @@ TEST_F(PlaneFixture, FusedPlaneIsWithinOneVoxelNearTheSurface) {
   for (int k = 0; k < config.dims.z(); ++k)
     for (int j = 0; j < config.dims.y(); ++j)
       for (int i = 0; i < config.dims.x(); ++i) {
-        const Voxel& v = volume.at(i, j, k);
+        const Voxel v = volume.voxel(i, j, k);
         const float truth = planeDistance(volume.position(i, j, k));
         if (v.weight <= 0.0f || std::fabs(truth) > 0.5f * config.voxel_size_m) continue;
         EXPECT_LT(std::fabs(v.distance_m), config.voxel_size_m) << "voxel " << i << "," << j << "," << k;
@@ -57,7 +57,7 @@ TEST_F(PlaneFixture, RespectsTruncationRulesAndTheWeightCap) {
   for (int n = 0; n < 8; ++n) integrator.integrate(depth, camera, T_W_C, &volume);
   const float dmax = static_cast<float>(config.positive_truncation_m);
   for (int k = 0; k < config.dims.z(); ++k) {
-    const Voxel& v = volume.at(50, 50, k);  // on the optical axis region
+    const Voxel v = volume.voxel(50, 50, k);  // on the optical axis region
     const float truth = planeDistance(volume.position(50, 50, k));
     EXPECT_LE(v.distance_m, dmax + 1e-6f);
     EXPECT_LE(v.weight, 5.0f);

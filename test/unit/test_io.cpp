@@ -21,7 +21,7 @@ TsdfVolume sphereVolume() {
   for (int k = 0; k < 40; ++k)
     for (int j = 0; j < 40; ++j)
       for (int i = 0; i < 40; ++i)
-        volume.at(i, j, k) = Voxel{std::min(0.1f, volume.position(i, j, k).norm() - 0.3f), 1.0f};
+        volume.setVoxel(i, j, k, Voxel{std::min(0.1f, volume.position(i, j, k).norm() - 0.3f), 1.0f});
   return volume;
 }
 
@@ -54,7 +54,7 @@ TEST(Surface, MeshAndCloudLieOnTheZeroLevelSetWithOutwardNormals) {
 
 TEST(Surface, UnobservedCellsMakeNoSurface) {
   TsdfVolume volume = sphereVolume();
-  for (size_t i = 0; i < volume.voxelCount(); ++i) volume.data()[i].weight = 0.0f;
+  for (size_t i = 0; i < volume.voxelCount(); ++i) volume.setVoxel(i, Voxel{0.1f, 0.0f});
   EXPECT_TRUE(extractMesh(volume).triangles.empty());
   EXPECT_TRUE(extractSurfaceCloud(volume).points_W.empty());
 }
@@ -98,8 +98,21 @@ TEST(Io, VtiVolumeRoundTripsExactly) {
   EXPECT_TRUE(loaded.config().origin_W.isApprox(volume.config().origin_W));
   EXPECT_DOUBLE_EQ(loaded.config().positive_truncation_m, volume.config().positive_truncation_m);
   for (size_t i = 0; i < volume.voxelCount(); i += 97) {
-    EXPECT_EQ(loaded.data()[i].distance_m, volume.data()[i].distance_m);
-    EXPECT_EQ(loaded.data()[i].weight, volume.data()[i].weight);
+    EXPECT_EQ(loaded.voxel(i).distance_m, volume.voxel(i).distance_m);
+    EXPECT_EQ(loaded.voxel(i).weight, volume.voxel(i).weight);
+  }
+}
+
+TEST(Io, VtiLoadsIntoCompactVoxels) {
+  const std::string dir = test::scratchDirectory("vti_compact");
+  const TsdfVolume volume = sphereVolume();
+  io::writeVti(dir + "/v.vti", volume);
+  const TsdfVolume compact = io::readVti(dir + "/v.vti", true);
+  EXPECT_TRUE(compact.compact());
+  // Compact voxels hold +-2 Dmax; the sphere's untruncated inside saturates there.
+  const float limit = 2.0f * volume.positiveTruncation();
+  for (size_t i = 0; i < volume.voxelCount(); i += 101) {
+    EXPECT_NEAR(compact.voxel(i).distance_m, std::max(-limit, volume.voxel(i).distance_m), 1e-5f);
   }
 }
 

@@ -82,7 +82,7 @@ TEST(Pipeline, BadFramesLeaveMapAndPoseUntouched) {
   EXPECT_FALSE(empty.fused);
   const FrameReport too_near = pipeline.processFrame(DepthImage(camera.width, camera.height, 0.2f), camera);
   EXPECT_EQ(too_near.track.status, TrackStatus::kBadInput) << "depth under MinDepth is no measurement";
-  for (size_t i = 0; i < pipeline.volume().voxelCount(); ++i) ASSERT_EQ(pipeline.volume().data()[i].weight, 0.0f);
+  for (size_t i = 0; i < pipeline.volume().voxelCount(); ++i) ASSERT_EQ(pipeline.volume().voxel(i).weight, 0.0f);
   EXPECT_TRUE(pipeline.pose().isApprox(Eigen::Isometry3d::Identity()));
 }
 

@@ -29,8 +29,9 @@ TriangleMesh readPlyMesh(const std::string& path);
 
 /// VTK XML ImageData (.vti) with point arrays "distance" and "weight", which ParaView opens.
 void writeVti(const std::string& path, const TsdfVolume& volume);
-/// Validates dimensions, spacing, origin, array sizes and values before building the volume.
-TsdfVolume readVti(const std::string& path);
+/// Validates dimensions, spacing, origin, array sizes and values before building the volume,
+/// stored compactly when asked.
+TsdfVolume readVti(const std::string& path, bool compact_voxels = false);
 
 /// A timestamped camera-to-world pose.
 struct StampedPose {
