@@ -2,6 +2,7 @@
 // trajectory, the map (mesh and cloud), per-frame statistics and, when the sequence has ground
 // truth, its accuracy and a plot.
 
+#include <sys/resource.h>
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -21,6 +22,7 @@
 #include "sdf_tracker/core/io.h"
 #include "sdf_tracker/core/parameters.h"
 #include "sdf_tracker/core/pipeline.h"
+#include "sdf_tracker/core/raycaster.h"
 #include "sdf_tracker/core/surface.h"
 #include "sdf_tracker/core/tum_sequence.h"
 #include "sdf_tracker/core/validation.h"
@@ -45,6 +47,8 @@ Tracks a depth camera through a TUM-layout sequence and reconstructs the scene.
   --intrinsics FX,FY,CX,CY[,W,H]  override the sequence's intrinsics
   --load-volume FILE    track against a saved .vti map instead of starting empty
   --save-volume         also write the map as sdf_volume.vti (ParaView) and triangles.obj
+  --raycast             also ray-cast the virtual depth view every frame (as the node's
+                        image_denoised) and time it
   --quiet               no progress bar
   --list-params         print every parameter with its value in the chosen preset and exit
 )";
@@ -94,7 +98,7 @@ int run(int argc, char** argv) {
   const st::tools::CommandLine args(
       argc, argv,
       {"sequence", "output", "preset", "param", "frames", "threads", "depth-factor", "intrinsics", "load-volume"},
-      {"save-volume", "quiet", "list-params", "help"});
+      {"save-volume", "raycast", "quiet", "list-params", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
     return 0;
@@ -150,7 +154,7 @@ int run(int argc, char** argv) {
   frames_csv << "timestamp,status,iterations,rms_residual_m,valid_points,inverse_condition,tracking_ms,fusion_ms,"
                 "fused,message\n";
   std::vector<st::io::StampedPose> trajectory;
-  std::vector<double> frame_ms, tracking_ms, fusion_ms;
+  std::vector<double> frame_ms, tracking_ms, fusion_ms, raycast_ms;
   size_t failed = 0;
   st::tools::ProgressBar progress(sequence.size(), !args.has("quiet"));
   const auto start = std::chrono::steady_clock::now();
@@ -160,10 +164,17 @@ int run(int argc, char** argv) {
     const st::TrackResult& t = report.track;
     if (!t.ok()) ++failed;
     trajectory.push_back({sequence.timestamp(i), pipeline.pose()});
+    double cast_ms = 0.0;
+    if (args.has("raycast")) {
+      const auto cast_start = std::chrono::steady_clock::now();
+      st::raycast(pipeline.volume(), camera, pipeline.pose(), settings.pipeline.raycast, &depth);
+      cast_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cast_start).count();
+      raycast_ms.push_back(cast_ms);
+    }
     if (!report.initialised_map) {
       tracking_ms.push_back(report.tracking_ms);
       if (report.fused) fusion_ms.push_back(report.fusion_ms);
-      frame_ms.push_back(report.tracking_ms + report.fusion_ms);
+      frame_ms.push_back(report.tracking_ms + report.fusion_ms + cast_ms);
     }
     std::string message = t.message;
     std::replace(message.begin(), message.end(), ',', ';');
@@ -187,21 +198,61 @@ int run(int argc, char** argv) {
     st::io::writeObj(output_dir + "/triangles.obj", mesh);
   }
 
+  struct rusage usage;
+  ::getrusage(RUSAGE_SELF, &usage);
+  const double peak_rss_mb = usage.ru_maxrss / 1024.0;  // Linux reports kilobytes
+
   std::ostringstream summary;
   summary << std::fixed << std::setprecision(2);
   summary << "frames " << sequence.size() << ", tracked ok " << sequence.size() - failed << ", failed " << failed
           << "\n";
   summary << "speed " << sequence.size() / elapsed_s << " frames/s including file reading; per frame (ms): median "
           << percentile(frame_ms, 0.5) << ", p95 " << percentile(frame_ms, 0.95) << "; tracking median "
-          << percentile(tracking_ms, 0.5) << ", fusion median " << percentile(fusion_ms, 0.5) << "\n";
+          << percentile(tracking_ms, 0.5) << ", fusion median " << percentile(fusion_ms, 0.5);
+  if (!raycast_ms.empty()) summary << ", ray casting median " << percentile(raycast_ms, 0.5);
+  summary << "\nmemory: grid " << pipeline.volume().memoryBytes() / 1048576.0 << " MiB, peak resident " << peak_rss_mb
+          << " MiB\n";
+
+  // The same figures for scripts (bench/), as JSON.
+  std::ostringstream json;
+  std::string sequence_json = sequence_dir;
+  for (size_t at = 0; (at = sequence_json.find_first_of("\"\\", at)) != std::string::npos; at += 2) {
+    sequence_json.insert(at, "\\");
+  }
+  json << std::setprecision(6) << "{\n  \"sequence\": \"" << sequence_json << "\",\n  \"preset\": \""
+       << args.get("preset", "default") << "\",\n  \"frames\": " << sequence.size() << ",\n  \"failed_frames\": " << failed
+       << ",\n  \"grid\": [" << v.dims.x() << ", " << v.dims.y() << ", " << v.dims.z() << "],\n  \"voxel_count\": "
+       << pipeline.volume().voxelCount() << ",\n  \"voxel_size_m\": " << v.voxel_size_m
+       << ",\n  \"compact_voxels\": " << (v.compact_voxels ? "true" : "false")
+#ifdef _OPENMP
+       << ",\n  \"threads\": " << omp_get_max_threads()
+#endif
+       << ",\n  \"ms\": {";
+  const std::vector<std::pair<const char*, const std::vector<double>*>> stages = {
+      {"frame", &frame_ms}, {"tracking", &tracking_ms}, {"fusion", &fusion_ms}, {"raycast", &raycast_ms}};
+  for (size_t i = 0; i < stages.size(); ++i) {
+    json << (i ? ", " : "") << "\"" << stages[i].first << "_median\": " << percentile(*stages[i].second, 0.5) << ", \""
+         << stages[i].first << "_p95\": " << percentile(*stages[i].second, 0.95);
+  }
+  json << "},\n  \"peak_rss_mb\": " << peak_rss_mb << ",\n  \"grid_mb\": " << pipeline.volume().memoryBytes() / 1048576.0
+       << ",\n  \"elapsed_s\": " << elapsed_s;
   if (!sequence.groundTruth().empty()) {
     const auto accuracy = st::tools::evaluateAccuracy(trajectory, sequence.groundTruth());
     summary << st::tools::formatAccuracy(accuracy);
     st::tools::writeAccuracyPlot(output_dir + "/trajectory.png", accuracy, "sdf_tracker on " + sequence_dir);
+    const auto& ate = accuracy.ate.translation_m;
+    json << ",\n  \"ate_m\": {\"rmse\": " << ate.rmse << ", \"mean\": " << ate.mean << ", \"median\": " << ate.median
+         << ", \"max\": " << ate.max << "}";
+    if (accuracy.rpe.translation_m_per_s.count > 0) {
+      json << ",\n  \"rpe\": {\"m_per_s\": " << accuracy.rpe.translation_m_per_s.rmse
+           << ", \"deg_per_s\": " << accuracy.rpe.rotation_deg_per_s.rmse << "}";
+    }
   } else {
     summary << "no groundtruth.txt: accuracy not evaluated\n";
   }
+  json << "\n}\n";
   st::io::writeTextFile(output_dir + "/summary.txt", summary.str());
+  st::io::writeTextFile(output_dir + "/summary.json", json.str());
   std::cout << summary.str() << "results in " << output_dir << "\n";
   return 0;
 }

@@ -1,15 +1,19 @@
-// Drives the real sdf_tracker_node: synthetic QVGA depth + camera_info in, lock-step with its
-// ~status; checks tf, path, cloud, accuracy against the offline pipeline, bad input, the
+// Drives the real sdf_tracker_node with a bag that tum_to_bag made from a synthetic QVGA sequence
+// (image + its own camera_info), frame by frame in lock-step with the node's ~status; checks tf,
+// path, cloud, accuracy against the offline pipeline on the same frames, bad input, the
 // save_mesh service and rejected reconfiguration.
 
 #include <gtest/gtest.h>
 
 #include <condition_variable>
+#include <map>
 #include <mutex>
 
 #include <dynamic_reconfigure/Reconfigure.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <nav_msgs/Path.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -23,6 +27,7 @@
 #include "sdf_tracker/core/parameters.h"
 #include "sdf_tracker/core/pipeline.h"
 #include "sdf_tracker/core/synthetic.h"
+#include "sdf_tracker/core/tum_sequence.h"
 #include "sdf_tracker/ros/conversions.h"
 
 namespace st = sdf_tracker;
@@ -102,56 +107,82 @@ class NodeTest : public ::testing::Test {
   size_t cloud_points_ = 0;
 };
 
-TEST_F(NodeTest, TracksASyntheticQvgaSequenceLikeTheOfflineRunnerAndSurvivesBadInput) {
-  const int frames = ros::NodeHandle("~").param("frames", 60);
-  const st::PinholeCamera camera = st::PinholeCamera::tumFreiburg1().scaledTo(320, 240);
-  const st::synthetic::Scene scene = st::synthetic::Scene::indoorRoom();
-  st::synthetic::NoiseModel noise;
+/// A QVGA synthetic sequence converted by the package's own tum_to_bag, as a user would.
+std::string makeSyntheticBag(const std::string& directory, int frames) {
+  st::synthetic::SequenceSpec spec;
+  spec.frames = frames;
+  spec.camera = st::PinholeCamera::tumFreiburg1().scaledTo(320, 240);
+  spec.seed = 11;
+  st::synthetic::writeSequence(directory, spec);
+  const std::string bag = directory + "/sequence.bag";
+  const std::string command = "rosrun sdf_tracker tum_to_bag " + directory + " " + bag + " > /dev/null";
+  if (std::system(command.c_str()) != 0) throw std::runtime_error("failed: " + command);
+  return bag;
+}
 
-  // The offline pipeline with the node's settings (default preset, 160^3 grid).
+TEST_F(NodeTest, TracksAQvgaBagLikeTheOfflineRunnerAndSurvivesBadInput) {
+  const int frames = ros::NodeHandle("~").param("frames", 60);
+  char pattern[] = "/tmp/sdf_tracker_node_test_XXXXXX";
+  ASSERT_NE(mkdtemp(pattern), nullptr);
+  const std::string directory = pattern;
+  const std::string bag_path = makeSyntheticBag(directory, frames);
+  const st::TumSequence sequence = st::TumSequence::open(directory);
+
+  // The offline pipeline with the node's settings (default preset, 160^3 grid), same frames.
   st::Settings settings = st::preset("default");
   settings.pipeline.volume.dims = Eigen::Vector3i(160, 160, 160);
   st::SdfPipeline offline(settings.pipeline);
-  std::vector<st::io::StampedPose> offline_trajectory, ground_truth;
+  std::vector<st::io::StampedPose> offline_trajectory;
+  for (size_t i = 0; i < sequence.size(); ++i) {
+    offline.processFrame(sequence.depth(i), sequence.camera());
+    offline_trajectory.push_back({sequence.timestamp(i), offline.pose()});
+  }
 
+  // Play the bag frame by frame: each image with its camera_info, waiting for the node's status.
+  rosbag::Bag bag(bag_path, rosbag::bagmode::Read);
+  rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{"/camera/depth/image", "/camera/depth/camera_info"}));
+  std::map<ros::Time, sensor_msgs::CameraInfoConstPtr> infos;
+  for (const rosbag::MessageInstance& m : view) {
+    if (const auto info = m.instantiate<sensor_msgs::CameraInfo>()) infos[info->header.stamp] = info;
+  }
+  double time_offset = 0.0;
   tf2_ros::Buffer tf_buffer;
   tf2_ros::TransformListener tf_listener(tf_buffer);
-  for (int i = 0; i < frames; ++i) {
-    const double t = 10.0 + i / 30.0;
-    const Eigen::Isometry3d T_W_C = st::synthetic::cameraPose(st::synthetic::Motion::kDesk, i / 30.0, frames / 30.0);
-    const st::DepthImage depth = scene.render(camera, T_W_C, noise, 11 + i);
-    std_msgs::Header header;
-    header.stamp = ros::Time(t);
-    header.frame_id = "camera_depth_optical_frame";
-    header.seq = i;
-    const auto status = publishAndWait(sdf_tracker_ros::toImageMsg(depth, header), camera);
-    EXPECT_EQ(status.status, sdf_tracker::TrackingStatus::OK) << "frame " << i << ": " << status.status_text;
-    EXPECT_EQ(status.header.stamp, header.stamp) << "outputs carry the input's stamp";
-
-    offline.processFrame(depth, camera);
-    offline_trajectory.push_back({t, offline.pose()});
-    ground_truth.push_back({t, T_W_C});
-
-    if (i == frames / 2) {  // a frame in an encoding the node cannot read: dropped, node alive
-      sensor_msgs::Image colour = sdf_tracker_ros::toImageMsg(depth, header);
+  int played = 0;
+  ros::Time last_stamp;
+  for (const rosbag::MessageInstance& m : view) {
+    const auto image = m.instantiate<sensor_msgs::Image>();
+    if (!image) continue;
+    ASSERT_TRUE(infos.count(image->header.stamp)) << "the bag pairs every image with a camera_info";
+    const sensor_msgs::CameraInfoConstPtr info = infos[image->header.stamp];
+    time_offset = image->header.stamp.toSec() - sequence.timestamp(played);
+    const auto status = publishAndWait(*image, sdf_tracker_ros::toCamera(*info));
+    EXPECT_EQ(status.status, sdf_tracker::TrackingStatus::OK) << "frame " << played << ": " << status.status_text;
+    EXPECT_EQ(status.header.stamp, image->header.stamp) << "outputs carry the input's stamp";
+    last_stamp = image->header.stamp;
+    if (++played == frames / 2) {  // a frame in an encoding the node cannot read: dropped, node alive
+      sensor_msgs::Image colour = *image;
       colour.encoding = "rgb8";
-      colour.header.stamp = ros::Time(t + 0.01);
-      const auto bad = publishAndWait(colour, camera);
+      colour.header.stamp += ros::Duration(0.01);
+      const auto bad = publishAndWait(colour, sdf_tracker_ros::toCamera(*info));
       EXPECT_EQ(bad.status, sdf_tracker::TrackingStatus::BAD_INPUT);
       EXPECT_NE(bad.status_text.find("rgb8"), std::string::npos) << bad.status_text;
     }
   }
+  ASSERT_EQ(played, frames);
   ros::Duration(1.5).sleep();  // the cloud timer runs at 2 Hz
 
   std::lock_guard<std::mutex> lock(mutex_);
   EXPECT_EQ(static_cast<int>(poses_.size()), frames);
   EXPECT_EQ(static_cast<int>(path_length_), frames);
   EXPECT_GT(cloud_points_, 1000u);
-  EXPECT_TRUE(tf_buffer.canTransform("map", "camera_depth_optical_frame", ros::Time(10.0 + (frames - 1) / 30.0)))
+  EXPECT_TRUE(tf_buffer.canTransform("map", "openni_depth_optical_frame", last_stamp))
       << "tf map -> camera at the last frame's stamp";
 
-  const double node_ate = st::evaluation::computeAte(poses_, ground_truth).translation_m.rmse;
-  const double offline_ate = st::evaluation::computeAte(offline_trajectory, ground_truth).translation_m.rmse;
+  std::vector<st::io::StampedPose> node_trajectory = poses_;
+  for (auto& pose : node_trajectory) pose.timestamp_s -= time_offset;
+  const double node_ate = st::evaluation::computeAte(node_trajectory, sequence.groundTruth()).translation_m.rmse;
+  const double offline_ate = st::evaluation::computeAte(offline_trajectory, sequence.groundTruth()).translation_m.rmse;
   std::cout << "[ figures  ] node ATE " << node_ate * 1000 << " mm, offline ATE " << offline_ate * 1000 << " mm\n";
   EXPECT_LT(std::abs(node_ate - offline_ate), kMaxAteDifference_m);
 }
