@@ -12,7 +12,10 @@ int main(int argc, char** argv) {
     sdf_tracker_ros::TrackerServer server(ros::NodeHandle(), ros::NodeHandle("~"));
     ros::spin();
   } catch (const std::exception& e) {
+    // Also straight to stderr: rosconsole has been seen to drop the message when the node
+    // exits right after it.
     ROS_FATAL("sdf_tracker: %s", e.what());
+    std::fprintf(stderr, "sdf_tracker_node: %s\n", e.what());
     return 1;
   }
   return 0;

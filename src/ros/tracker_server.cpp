@@ -141,8 +141,14 @@ void readParameters(const ros::NodeHandle& pnh, st::Settings* settings, NodeOpti
     if (name.find('/') != std::string::npos) continue;  // nested namespaces belong to others
     XmlRpc::XmlRpcValue value;
     pnh.getParam(name, value);
+    std::string text;
     try {
-      const std::string text = toText(value);
+      text = toText(value);
+    } catch (const std::invalid_argument& e) {
+      errors.require(false, "~" + name + " " + e.what());
+      continue;
+    }
+    try {
       if (st::findParameter(name)) {
         st::setParameter(settings, name, text);
         if (name.rfind("FocalLength", 0) == 0 || name.rfind("CenterPoint", 0) == 0) {
@@ -152,7 +158,7 @@ void readParameters(const ros::NodeHandle& pnh, st::Settings* settings, NodeOpti
         unknown->push_back(name);
       }
     } catch (const std::invalid_argument& e) {
-      errors.require(false, "~" + name + ": " + e.what());
+      errors.require(false, e.what());  // names the parameter and the value
     }
   }
   errors.merge("", settings->validate());
