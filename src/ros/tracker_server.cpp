@@ -387,30 +387,26 @@ void TrackerServer::publishPose(const std_msgs::Header& header, const Eigen::Iso
   tf_broadcaster_.sendTransform(transforms);
 }
 
-void TrackerServer::publishCloud(const ros::TimerEvent&) {
-  if (cloud_pub_.getNumSubscribers() == 0) return;
-  st::SurfaceCloud cloud;
+template <typename Extract, typename Convert>
+void TrackerServer::publishMap(const ros::Publisher& publisher, Extract extract, Convert convert) {
+  if (publisher.getNumSubscribers() == 0) return;  // extraction walks the whole grid
   std_msgs::Header header;
+  decltype(extract()) map;
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    cloud = st::extractSurfaceCloud(pipeline_->volume());
+    map = extract();
     header.stamp = last_stamp_;
   }
   header.frame_id = options_.world_frame;
-  cloud_pub_.publish(toCloudMsg(cloud, header));
+  publisher.publish(convert(map, header));
+}
+
+void TrackerServer::publishCloud(const ros::TimerEvent&) {
+  publishMap(cloud_pub_, [this] { return st::extractSurfaceCloud(pipeline_->volume()); }, toCloudMsg);
 }
 
 void TrackerServer::publishMesh(const ros::TimerEvent&) {
-  if (mesh_pub_.getNumSubscribers() == 0) return;
-  st::TriangleMesh mesh;
-  std_msgs::Header header;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    mesh = st::extractMesh(pipeline_->volume());
-    header.stamp = last_stamp_;
-  }
-  header.frame_id = options_.world_frame;
-  mesh_pub_.publish(toMarker(mesh, header));
+  publishMap(mesh_pub_, [this] { return st::extractMesh(pipeline_->volume()); }, toMarker);
 }
 
 void TrackerServer::reconfigure(sdf_tracker::SdfTrackerConfig& config, uint32_t /*level*/) {
@@ -436,51 +432,46 @@ bool TrackerServer::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
   return true;
 }
 
-bool TrackerServer::saveMesh(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res) {
+bool TrackerServer::answer(sdf_tracker::SavePath::Response& res, const std::function<std::string()>& action) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const std::string path = outputPath(req.path, "mesh.ply");
   try {
+    res.message = action();
+    res.success = true;
+  } catch (const std::exception& e) {
+    res.success = false;
+    res.message = e.what();
+  }
+  return true;  // the call itself succeeded; the response says whether the action did
+}
+
+bool TrackerServer::saveMesh(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res) {
+  return answer(res, [&] {
+    const std::string path = outputPath(req.path, "mesh.ply");
     const st::TriangleMesh mesh = st::extractMesh(pipeline_->volume());
     const bool obj = path.size() > 4 && path.compare(path.size() - 4, 4, ".obj") == 0;
     obj ? st::io::writeObj(path, mesh) : st::io::writePly(path, mesh);
     writeTrajectory();
-    res.success = true;
-    res.message = "wrote " + std::to_string(mesh.triangles.size()) + " triangles to " + path;
-  } catch (const std::exception& e) {
-    res.success = false;
-    res.message = e.what();
-  }
-  return true;
+    return "wrote " + std::to_string(mesh.triangles.size()) + " triangles to " + path;
+  });
 }
 
 bool TrackerServer::saveVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  const std::string path = outputPath(req.path, "sdf_volume.vti");
-  try {
+  return answer(res, [&] {
+    const std::string path = outputPath(req.path, "sdf_volume.vti");
     st::io::writeVti(path, pipeline_->volume());
     writeTrajectory();
-    res.success = true;
-    res.message = "wrote the volume to " + path;
-  } catch (const std::exception& e) {
-    res.success = false;
-    res.message = e.what();
-  }
-  return true;
+    return "wrote the volume to " + path;
+  });
 }
 
 bool TrackerServer::loadVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  try {
-    pipeline_->setVolume(st::io::readVti(outputPath(req.path, "sdf_volume.vti")));
+  return answer(res, [&] {
+    const std::string path = outputPath(req.path, "sdf_volume.vti");
+    pipeline_->setVolume(st::io::readVti(path, settings_.pipeline.volume.compact_voxels));
     trajectory_.clear();
     path_.poses.clear();
-    res.success = true;
-    res.message = "tracking against " + outputPath(req.path, "sdf_volume.vti");
-  } catch (const std::exception& e) {
-    res.success = false;
-    res.message = e.what();
-  }
-  return true;
+    return "tracking against " + path;
+  });
 }
 
 }  // namespace sdf_tracker_ros

@@ -12,6 +12,7 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include "../tools/command_line.h"
 #include "sdf_tracker/core/tum_sequence.h"
 #include "sdf_tracker/ros/conversions.h"
 
@@ -88,11 +89,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "tum_to_bag: error: " << e.what() << "\n";
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return sdf_tracker::tools::runTool("tum_to_bag", run, argc, argv); }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <sstream>
 #include <stdexcept>
 
@@ -57,6 +58,15 @@ int CommandLine::getInt(const std::string& name, int fallback) const {
   const double value = getDouble(name, fallback);
   if (value != std::floor(value)) throw std::invalid_argument("--" + name + ": expected an integer, got \"" + get(name) + "\"");
   return static_cast<int>(value);
+}
+
+int runTool(const char* tool, int (*run)(int, char**), int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "\n" << tool << ": error: " << e.what() << "\n";
+    return 1;
+  }
 }
 
 }  // namespace sdf_tracker::tools

@@ -26,4 +26,8 @@ class CommandLine {
   std::map<std::string, std::vector<std::string>> values_;
 };
 
+/// A tool's main(): runs `run` and turns any exception into "<tool>: error: <what>" on stderr and
+/// exit code 1.
+int runTool(const char* tool, int (*run)(int, char**), int argc, char** argv);
+
 }  // namespace sdf_tracker::tools

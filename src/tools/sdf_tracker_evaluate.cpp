@@ -36,11 +36,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "sdf_tracker_evaluate: error: " << e.what() << "\n";
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return sdf_tracker::tools::runTool("sdf_tracker_evaluate", run, argc, argv); }

@@ -259,11 +259,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "\nsdf_tracker_offline: error: " << e.what() << "\n";
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return sdf_tracker::tools::runTool("sdf_tracker_offline", run, argc, argv); }

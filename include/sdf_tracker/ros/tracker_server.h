@@ -1,5 +1,6 @@
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -63,10 +64,15 @@ class TrackerServer {
   void depthCallback(const sensor_msgs::ImageConstPtr& image, const sensor_msgs::CameraInfoConstPtr& synchronised_info);
   void checkInputs(const ros::TimerEvent&);
   void publishPose(const std_msgs::Header& header, const Eigen::Isometry3d& T_W_C, const std::string& camera_frame);
+  /// Extracts a map product under the lock and publishes it, only when someone listens.
+  template <typename Extract, typename Convert>
+  void publishMap(const ros::Publisher& publisher, Extract extract, Convert convert);
   void publishCloud(const ros::TimerEvent&);
   void publishMesh(const ros::TimerEvent&);
   void reconfigure(sdf_tracker::SdfTrackerConfig& config, uint32_t level);
   bool reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&);
+  /// Runs a service's action under the lock; its text (or the exception's) becomes the message.
+  bool answer(sdf_tracker::SavePath::Response& res, const std::function<std::string()>& action);
   bool saveMesh(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res);
   bool saveVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res);
   bool loadVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res);
