@@ -95,11 +95,10 @@ void writeAccuracyPlot(const std::string& path, const Accuracy& accuracy, const 
   // Top view over the two axes along which the ground truth spreads most.
   Eigen::Vector3d lo = gt.front(), hi = gt.front();
   for (const auto& p : gt) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  int a = 0, b = 1;
   const Eigen::Vector3d span = hi - lo;
   std::vector<int> axes = {0, 1, 2};
   std::sort(axes.begin(), axes.end(), [&span](int i, int j) { return span[i] > span[j]; });
-  a = std::min(axes[0], axes[1]), b = std::max(axes[0], axes[1]);
+  const int a = std::min(axes[0], axes[1]), b = std::max(axes[0], axes[1]);
   std::vector<cv::Point2d> gt_2d, est_2d;
   double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
   for (size_t i = 0; i < gt.size(); ++i) {

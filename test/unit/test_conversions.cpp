@@ -5,6 +5,8 @@
 
 #include <sensor_msgs/image_encodings.h>
 
+#include "sdf_tracker/SdfTrackerConfig.h"
+#include "sdf_tracker/core/parameters.h"
 #include "sdf_tracker/ros/conversions.h"
 
 namespace sdf_tracker_ros {
@@ -57,6 +59,14 @@ TEST(Conversions, UnreadableImagesNameTheProblem) {
   EXPECT_THROW(toCamera(info), std::invalid_argument);
   info.K = {525, 0, 319.5, 0, 525, 239.5, 0, 0, 1};
   EXPECT_DOUBLE_EQ(toCamera(info).cx, 319.5);
+}
+
+TEST(Reconfigure, EveryLiveParameterIsInTheCoreTableAndMarkedLive) {
+  for (const auto& description : sdf_tracker::SdfTrackerConfig::__getParamDescriptions__()) {
+    const sdf_tracker::ParameterSpec* spec = sdf_tracker::findParameter(description->name);
+    ASSERT_NE(spec, nullptr) << description->name << " is in cfg/SdfTracker.cfg but not in the parameter table";
+    EXPECT_TRUE(spec->live) << description->name << " is reconfigurable but its table entry says it is not live";
+  }
 }
 
 }  // namespace
