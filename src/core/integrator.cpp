@@ -51,6 +51,7 @@ size_t Integrator::integrate(const DepthImage& depth, const PinholeCamera& camer
   const float wmax = static_cast<float>(config_.max_weight);
   const bool sensor_weights = config_.weighting == MeasurementWeighting::kSensorNoise;
   const DepthNoiseModel& noise = config_.noise;
+  const float reference_sigma = noise.referenceSigma();
   const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
   const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
   const int width = camera.width, height = camera.height;
@@ -100,7 +101,7 @@ size_t Integrator::integrate(const DepthImage& depth, const PinholeCamera& camer
           const float d = z_measured - p_C.z();
           if (d < dmin) continue;
           const float d_clamped = std::min(d, dmax);
-          const float w_new = sensor_weights ? noise.weight(z_measured) : 1.0f;
+          const float w_new = sensor_weights ? noise.weight(z_measured, reference_sigma) : 1.0f;
           Voxel voxel = codec.decode(row[i]);
           const float w_sum = voxel.weight + w_new;
           voxel.distance_m = (voxel.distance_m * voxel.weight + d_clamped * w_new) / w_sum;

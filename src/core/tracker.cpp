@@ -69,6 +69,7 @@ NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_
   const Eigen::Isometry3f T = T_W_C.cast<float>();
   const Eigen::Vector3f c = T.translation();
   const float dmax = volume.positiveTruncation();
+  const float reference_sigma = noise ? noise->referenceSigma() : 1.0f;
   const int n = static_cast<int>(points_C.size());
   NormalEquations sum;
 #pragma omp parallel for schedule(static) reduction(sumEquations : sum)
@@ -91,8 +92,8 @@ NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_
     double w;
     if (noise) {
       const float z = points_C[idx].z();
-      const float sigma_ratio = noise->sigma(z) / noise->sigma(static_cast<float>(noise->reference_depth_m));
-      w = huberWeight(s.distance_m, huber_k * std::max(1.0f, sigma_ratio)) * noise->weight(z);
+      const float sigma_ratio = noise->sigma(z) / reference_sigma;
+      w = huberWeight(s.distance_m, huber_k * std::max(1.0f, sigma_ratio)) * noise->weight(z, reference_sigma);
     } else {
       w = huberWeight(s.distance_m, huber_k);
     }

@@ -20,9 +20,11 @@ struct DepthNoiseModel {
     const float dz = z_m - static_cast<float>(z0_m);
     return static_cast<float>(sigma_at_z0_m) + static_cast<float>(quadratic_m_per_m2) * dz * dz;
   }
-  /// Inverse-variance weight relative to a measurement at reference_depth_m, in (0, 1].
-  float weight(float z_m) const {
-    const float ratio = sigma(static_cast<float>(reference_depth_m)) / sigma(z_m);
+  float referenceSigma() const { return sigma(static_cast<float>(reference_depth_m)); }
+  /// Inverse-variance weight relative to a measurement at reference_depth_m, in (0, 1]; hot loops
+  /// pass referenceSigma() computed once.
+  float weight(float z_m, float reference_sigma) const {
+    const float ratio = reference_sigma / sigma(z_m);
     return std::min(1.0f, ratio * ratio);
   }
 
