@@ -10,6 +10,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <sys/stat.h>
+
 #include <opencv2/imgcodecs.hpp>
 
 namespace sdf_tracker::io {
@@ -364,6 +366,19 @@ std::vector<StampedPose> readTrajectory(const std::string& path) {
     poses.push_back(pose);
   }
   return poses;
+}
+
+void makeDirectories(const std::string& path) {
+  std::string partial = !path.empty() && path[0] == '/' ? "/" : "";
+  std::istringstream parts(path);
+  std::string part;
+  while (std::getline(parts, part, '/')) {
+    if (part.empty()) continue;
+    partial += part + "/";
+    if (::mkdir(partial.c_str(), 0755) != 0 && errno != EEXIST) {
+      fail(partial, std::string("cannot create directory: ") + std::strerror(errno));
+    }
+  }
 }
 
 void writeTextFile(const std::string& path, const std::string& text) {

@@ -8,8 +8,6 @@
 
 namespace sdf_tracker {
 
-namespace {
-
 double parseNumber(const std::string& name, const std::string& text) {
   std::istringstream in(text);
   double value;
@@ -25,6 +23,14 @@ int parseInteger(const std::string& name, const std::string& text) {
   if (value != static_cast<int>(value)) throw std::invalid_argument(name + ": expected an integer, got \"" + text + "\"");
   return static_cast<int>(value);
 }
+
+bool parseBool(const std::string& name, const std::string& text) {
+  if (text == "true" || text == "1") return true;
+  if (text == "false" || text == "0") return false;
+  throw std::invalid_argument(name + ": expected true or false, got \"" + text + "\"");
+}
+
+namespace {
 
 std::string toText(double value) {
   std::ostringstream out;
@@ -48,12 +54,7 @@ ParameterSpec numeric(const std::string& name, const std::string& description, b
 template <typename Accessor>
 ParameterSpec flag(const std::string& name, const std::string& description, bool live, Accessor field) {
   return ParameterSpec{name, description, live,
-                       [name, field](Settings& s, const std::string& text) {
-                         if (text != "true" && text != "false") {
-                           throw std::invalid_argument(name + ": expected true or false, got \"" + text + "\"");
-                         }
-                         field(s) = text == "true";
-                       },
+                       [name, field](Settings& s, const std::string& text) { field(s) = parseBool(name, text); },
                        [field](const Settings& s) { return std::string(field(s) ? "true" : "false"); }};
 }
 

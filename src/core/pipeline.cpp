@@ -76,9 +76,7 @@ void SdfPipeline::reset() {
 
 void SdfPipeline::setVolume(TsdfVolume volume) {
   volume_ = std::make_unique<TsdfVolume>(std::move(volume));
-  config_.volume.dims = volume_->dims();
-  config_.volume.voxel_size_m = volume_->config().voxel_size_m;
-  config_.volume.positive_truncation_m = volume_->config().positive_truncation_m;
+  config_.volume = volume_->config();
   T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   map_initialised_ = true;
   consecutive_failures_ = 0;
@@ -89,8 +87,9 @@ void SdfPipeline::updateConfig(const PipelineConfig& candidate) {
   const VolumeConfig& a = candidate.volume;
   const VolumeConfig& b = config_.volume;
   if (a.dims != b.dims || a.voxel_size_m != b.voxel_size_m || a.positive_truncation_m != b.positive_truncation_m ||
-      candidate.initial_camera_in_grid != config_.initial_camera_in_grid) {
-    throw std::invalid_argument("the grid (size, cell size, positive truncation, placement) cannot change live");
+      a.compact_voxels != b.compact_voxels || candidate.initial_camera_in_grid != config_.initial_camera_in_grid) {
+    throw std::invalid_argument(
+        "the grid (size, cell size, positive truncation, voxel storage, placement) cannot change live");
   }
   integrator_ = std::make_unique<Integrator>(candidate.integrator);
   tracker_ = std::make_unique<Tracker>(candidate.tracker);

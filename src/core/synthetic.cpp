@@ -6,8 +6,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include <sys/stat.h>
-
 #include "sdf_tracker/core/io.h"
 
 namespace sdf_tracker::synthetic {
@@ -93,12 +91,6 @@ Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& targ
   T.linear() = R * Eigen::AngleAxisd(roll_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   T.translation() = eye;
   return T;
-}
-
-void makeDirectory(const std::string& path) {
-  if (::mkdir(path.c_str(), 0755) != 0 && errno != EEXIST) {
-    throw std::runtime_error(path + ": cannot create directory");
-  }
 }
 
 }  // namespace
@@ -224,8 +216,7 @@ void writeSequence(const std::string& directory, const SequenceSpec& spec) {
     throw std::invalid_argument("a sequence needs frames > 0 and rate_hz > 0 (got " + std::to_string(spec.frames) +
                                 ", " + std::to_string(spec.rate_hz) + ")");
   }
-  makeDirectory(directory);
-  makeDirectory(directory + "/depth");
+  io::makeDirectories(directory + "/depth");
   const Scene scene = spec.motion == Motion::kPlanar ? Scene::singleWall() : Scene::indoorRoom();
   const double duration = spec.frames / spec.rate_hz;
   std::ostringstream depth_list, ground_truth, intrinsics;

@@ -93,7 +93,8 @@ NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_
     if (noise) {
       const float z = points_C[idx].z();
       const float sigma_ratio = noise->sigma(z) / reference_sigma;
-      w = huberWeight(s.distance_m, huber_k * std::max(1.0f, sigma_ratio)) * noise->weight(z, reference_sigma);
+      w = huberWeight(s.distance_m, huber_k * std::max(1.0f, sigma_ratio)) *
+          DepthNoiseModel::weightForSigmaRatio(sigma_ratio);
     } else {
       w = huberWeight(s.distance_m, huber_k);
     }

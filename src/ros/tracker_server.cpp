@@ -35,37 +35,21 @@ std::string toText(const XmlRpc::XmlRpcValue& value) {
   }
 }
 
-bool toBool(const std::string& name, const std::string& text) {
-  if (text == "true" || text == "1") return true;
-  if (text == "false" || text == "0") return false;
-  throw std::invalid_argument(name + ": expected true or false, got \"" + text + "\"");
-}
-
-double toDouble(const std::string& name, const std::string& text) {
-  try {
-    size_t used = 0;
-    const double value = std::stod(text, &used);
-    if (used == text.size()) return value;
-  } catch (const std::exception&) {
-  }
-  throw std::invalid_argument(name + ": expected a number, got \"" + text + "\"");
-}
-
 /// The node's own parameters (everything that is not in the core's table).
 bool applyNodeOption(NodeOptions* o, const std::string& name, const std::string& text) {
   if (name == "c_name") o->camera_name = text;
-  else if (name == "depth_registered") o->depth_registered = toBool(name, text);
+  else if (name == "depth_registered") o->depth_registered = st::parseBool(name, text);
   else if (name == "world_frame") o->world_frame = text;
   else if (name == "odom_frame") o->odom_frame = text;
   else if (name == "camera_frame") o->camera_frame = text;
-  else if (name == "cloud_rate") o->cloud_rate_hz = toDouble(name, text);
-  else if (name == "mesh_rate") o->mesh_rate_hz = toDouble(name, text);
+  else if (name == "cloud_rate") o->cloud_rate_hz = st::parseNumber(name, text);
+  else if (name == "mesh_rate") o->mesh_rate_hz = st::parseNumber(name, text);
   else if (name == "trajectory_file") o->trajectory_file = text;
   else if (name == "mesh_file") o->mesh_file = text;
   else if (name == "cloud_file") o->cloud_file = text;
   else if (name == "LoadVolume") o->load_volume = text;
-  else if (name == "OutputTriangles") o->output_triangles = toBool(name, text);
-  else if (name == "OutputVolume") o->output_volume = toBool(name, text);
+  else if (name == "OutputTriangles") o->output_triangles = st::parseBool(name, text);
+  else if (name == "OutputVolume") o->output_volume = st::parseBool(name, text);
   else if (name == "output_directory") o->output_directory = text;
   else if (name == "InteractiveMode" || name == "preset") return true;  // handled by the caller
   else return false;

@@ -3,7 +3,6 @@
 // truth, its accuracy and a plot.
 
 #include <sys/resource.h>
-#include <sys/stat.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -53,25 +52,11 @@ Tracks a depth camera through a TUM-layout sequence and reconstructs the scene.
   --list-params         print every parameter with its value in the chosen preset and exit
 )";
 
-void makeDirectories(const std::string& path) {
-  std::string partial;
-  std::istringstream parts(path);
-  std::string part;
-  if (!path.empty() && path[0] == '/') partial = "/";
-  while (std::getline(parts, part, '/')) {
-    if (part.empty()) continue;
-    partial += part + "/";
-    if (::mkdir(partial.c_str(), 0755) != 0 && errno != EEXIST) {
-      throw std::runtime_error(partial + ": cannot create directory");
-    }
-  }
-}
-
 st::PinholeCamera parseIntrinsics(const std::string& text, const st::PinholeCamera& base) {
   std::vector<double> v;
   std::istringstream in(text);
   std::string item;
-  while (std::getline(in, item, ',')) v.push_back(std::stod(item));
+  while (std::getline(in, item, ',')) v.push_back(st::parseNumber("--intrinsics", item));
   if (v.size() != 4 && v.size() != 6) {
     throw std::invalid_argument("--intrinsics: expected FX,FY,CX,CY[,W,H], got \"" + text + "\"");
   }
@@ -135,7 +120,7 @@ int run(int argc, char** argv) {
     if (frames < 1) throw std::invalid_argument("--frames must be >= 1 (got " + std::to_string(frames) + ")");
     sequence.truncate(static_cast<size_t>(frames));
   }
-  makeDirectories(output_dir);
+  st::io::makeDirectories(output_dir);
   const st::PinholeCamera& camera = sequence.camera();
   std::cout << "sequence " << sequence_dir << ": " << sequence.size() << " frames, " << camera.width << "x"
             << camera.height << ", fx " << camera.fx << " fy " << camera.fy << " cx " << camera.cx << " cy "

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <utility>
 
 #include "sdf_tracker/core/camera.h"
 #include "sdf_tracker/core/tsdf_volume.h"
@@ -115,14 +116,19 @@ TEST(TsdfVolume, TrilinearValueAndGradientApproximateAnAnalyticSphere) {
   }
 }
 
-TEST(TsdfVolume, CompactVoxelsHalveMemoryAndQuantiseFinely) {
+/// The same 20^3 grid twice: float voxels, then compact ones.
+std::pair<TsdfVolume, TsdfVolume> floatAndCompactGrids(double voxel_size_m) {
   VolumeConfig config;
   config.dims = Eigen::Vector3i(20, 20, 20);
-  config.voxel_size_m = 0.05;
+  config.voxel_size_m = voxel_size_m;
   config.positive_truncation_m = 0.1;
   TsdfVolume full(config);
   config.compact_voxels = true;
-  TsdfVolume compact(config);
+  return {std::move(full), TsdfVolume(config)};
+}
+
+TEST(TsdfVolume, CompactVoxelsHalveMemoryAndQuantiseFinely) {
+  auto [full, compact] = floatAndCompactGrids(0.05);
   EXPECT_EQ(compact.memoryBytes() * 2, full.memoryBytes());
   EXPECT_EQ(compact.voxel(3, 3, 3).weight, 0.0f);
   EXPECT_NEAR(compact.voxel(3, 3, 3).distance_m, 0.1f, 1e-5f);
@@ -142,13 +148,7 @@ TEST(TsdfVolume, CompactVoxelsHalveMemoryAndQuantiseFinely) {
 
 TEST(TsdfVolume, CompactTrilinearSamplingMatchesTheFloatGrid) {
   const Eigen::Vector3f n = Eigen::Vector3f(0.3f, -1.0f, 0.7f).normalized();
-  VolumeConfig config;
-  config.dims = Eigen::Vector3i(20, 20, 20);
-  config.voxel_size_m = 0.01;
-  config.positive_truncation_m = 0.1;
-  TsdfVolume full(config);
-  config.compact_voxels = true;
-  TsdfVolume compact(config);
+  auto [full, compact] = floatAndCompactGrids(0.01);
   for (int k = 0; k < 20; ++k)
     for (int j = 0; j < 20; ++j)
       for (int i = 0; i < 20; ++i) {

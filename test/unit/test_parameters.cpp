@@ -100,6 +100,9 @@ TEST(Pipeline, LiveUpdatesValidateAndRefuseGridChanges) {
   candidate = pipeline.config();
   candidate.volume.voxel_size_m = 0.05;
   EXPECT_THROW(pipeline.updateConfig(candidate), std::invalid_argument);
+  candidate = pipeline.config();
+  candidate.volume.compact_voxels = true;
+  EXPECT_THROW(pipeline.updateConfig(candidate), std::invalid_argument) << "the storage belongs to the grid";
 }
 
 }  // namespace

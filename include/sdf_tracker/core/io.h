@@ -43,6 +43,9 @@ struct StampedPose {
 void writeTrajectory(const std::string& path, const std::vector<StampedPose>& poses);
 std::vector<StampedPose> readTrajectory(const std::string& path);
 
+/// Creates a directory and any missing parents (like mkdir -p).
+void makeDirectories(const std::string& path);
+
 /// Writes text atomically (temporary file + rename).
 void writeTextFile(const std::string& path, const std::string& text);
 

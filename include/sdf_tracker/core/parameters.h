@@ -48,6 +48,11 @@ void setParameter(Settings* settings, const std::string& name, const std::string
 Settings preset(const std::string& name);
 std::vector<std::string> presetNames();
 
+/// Text -> value for parameters; throw std::invalid_argument naming `name` and the text.
+double parseNumber(const std::string& name, const std::string& text);
+int parseInteger(const std::string& name, const std::string& text);
+bool parseBool(const std::string& name, const std::string& text);  ///< true/false (or 1/0)
+
 /// "4x12,2x6,1x2" <-> levels (stride x iterations, coarse to fine).
 std::vector<PyramidLevel> parseSchedule(const std::string& text);
 std::string formatSchedule(const std::vector<PyramidLevel>& levels);

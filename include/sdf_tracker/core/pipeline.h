@@ -27,7 +27,8 @@ struct PipelineConfig {
   double max_depth_m = 8.0;
   /// Where the first camera sits in the grid, as a fraction of the grid's extent along each axis
   /// (world axes = the first camera's axes). (0.5, 0.5, 0) puts it at the centre of the grid's
-  /// near face, looking in along +z.
+  /// near face, looking in along +z. The grid's origin follows from this: volume.origin_W is
+  /// not read.
   Eigen::Vector3d initial_camera_in_grid = Eigen::Vector3d(0.5, 0.5, 0.0);
   /// Fuse a tracked frame only when the camera moved at least this much (|xi| of the motion
   /// since the last fused frame, metres and radians); 0 fuses every frame.

@@ -23,10 +23,9 @@ struct DepthNoiseModel {
   float referenceSigma() const { return sigma(static_cast<float>(reference_depth_m)); }
   /// Inverse-variance weight relative to a measurement at reference_depth_m, in (0, 1]; hot loops
   /// pass referenceSigma() computed once.
-  float weight(float z_m, float reference_sigma) const {
-    const float ratio = reference_sigma / sigma(z_m);
-    return std::min(1.0f, ratio * ratio);
-  }
+  float weight(float z_m, float reference_sigma) const { return weightForSigmaRatio(sigma(z_m) / reference_sigma); }
+  /// The same weight from sigma(z) / referenceSigma(), for callers that need the ratio too.
+  static float weightForSigmaRatio(float sigma_ratio) { return std::min(1.0f, 1.0f / (sigma_ratio * sigma_ratio)); }
 
   std::vector<std::string> validate() const;
 };
