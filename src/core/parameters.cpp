@@ -1,6 +1,9 @@
 #include "sdf_tracker/core/parameters.h"
 
 #include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -8,20 +11,37 @@
 
 namespace sdf_tracker {
 
+// ---------------------------------------------------------------------------------------------
+// Text and values
+
 double parseNumber(const std::string& name, const std::string& text) {
   std::istringstream in(text);
   double value;
   std::string rest;
-  if (!(in >> value) || (in >> rest)) {
+  if (!(in >> value) || (in >> rest) || !std::isfinite(value)) {
     throw std::invalid_argument(name + ": expected a number, got \"" + text + "\"");
   }
   return value;
 }
 
-int parseInteger(const std::string& name, const std::string& text) {
-  const double value = parseNumber(name, text);
-  if (value != static_cast<int>(value)) throw std::invalid_argument(name + ": expected an integer, got \"" + text + "\"");
+namespace {
+
+/// A whole double within int's range as int; nullopt otherwise (never a conversion with
+/// undefined behaviour).
+std::optional<int> exactInt(double value) {
+  if (!(value == std::floor(value)) || value < std::numeric_limits<int>::min() ||
+      value > std::numeric_limits<int>::max()) {
+    return std::nullopt;
+  }
   return static_cast<int>(value);
+}
+
+}  // namespace
+
+int parseInteger(const std::string& name, const std::string& text) {
+  const std::optional<int> value = exactInt(parseNumber(name, text));
+  if (!value) throw std::invalid_argument(name + ": expected a whole number, got \"" + text + "\"");
+  return *value;
 }
 
 bool parseBool(const std::string& name, const std::string& text) {
@@ -30,119 +50,249 @@ bool parseBool(const std::string& name, const std::string& text) {
   throw std::invalid_argument(name + ": expected true or false, got \"" + text + "\"");
 }
 
+std::string toText(const ParameterValue& value) {
+  struct Visitor {
+    std::string operator()(bool b) const { return b ? "true" : "false"; }
+    std::string operator()(int i) const { return std::to_string(i); }
+    std::string operator()(double d) const {
+      // The shortest text that reads back to the same double ("0.02", not "0.0200000000000000004"),
+      // in plain notation where that is short ("10", not "1e+01").
+      const bool plain = d == 0.0 || (std::fabs(d) >= 1e-4 && std::fabs(d) < 1e7);
+      for (int digits = 1; digits <= std::numeric_limits<double>::max_digits10; ++digits) {
+        std::ostringstream out;
+        out << std::setprecision(digits) << d;
+        if (plain && out.str().find('e') != std::string::npos) continue;
+        if (std::stod(out.str()) == d) return out.str();
+      }
+      std::ostringstream out;
+      out << std::setprecision(std::numeric_limits<double>::max_digits10) << d;
+      return out.str();
+    }
+    std::string operator()(const std::string& s) const { return s; }
+  };
+  return std::visit(Visitor{}, value);
+}
+
+const char* toString(ParameterType type) {
+  switch (type) {
+    case ParameterType::kBool: return "bool";
+    case ParameterType::kInt: return "int";
+    case ParameterType::kDouble: return "double";
+    case ParameterType::kText: return "text";
+  }
+  return "unknown";
+}
+
+bool Range::contains(double value) const {
+  if (!std::isfinite(value)) return false;
+  const bool above_low = low_open ? value > low : value >= low;
+  const bool below_high = high_open ? value < high : value <= high;
+  return above_low && below_high;
+}
+
+std::string Range::toString() const {
+  return (low_open ? "(" : "[") + sdf_tracker::toText(low) + ", " + sdf_tracker::toText(high) + (high_open ? ")" : "]");
+}
+
+const ParameterValue& PresetDefaults::of(Preset preset) const {
+  switch (preset) {
+    case Preset::kPaper: return paper;
+    case Preset::kReference: return reference;
+    case Preset::kDefault: break;
+  }
+  return default_preset;
+}
+
+ParameterValue ParameterSpec::checkValue(const ParameterValue& value) const {
+  auto wrongType = [&]() {
+    return std::invalid_argument(name + ": expected " + (type == ParameterType::kBool ? "true or false"
+                                                         : type == ParameterType::kInt ? "a whole number"
+                                                         : type == ParameterType::kDouble ? "a number"
+                                                                                          : "text") +
+                                 ", got \"" + sdf_tracker::toText(value) + "\"");
+  };
+  ParameterValue typed;
+  switch (type) {
+    case ParameterType::kBool:
+      if (!std::holds_alternative<bool>(value)) throw wrongType();
+      typed = value;
+      break;
+    case ParameterType::kInt:
+      if (std::holds_alternative<int>(value)) {
+        typed = value;
+      } else if (const double* d = std::get_if<double>(&value)) {
+        const std::optional<int> whole = exactInt(*d);
+        if (!whole) throw wrongType();
+        typed = *whole;
+      } else {
+        throw wrongType();
+      }
+      break;
+    case ParameterType::kDouble:
+      if (const int* i = std::get_if<int>(&value)) typed = static_cast<double>(*i);
+      else if (std::holds_alternative<double>(value)) typed = value;
+      else throw wrongType();
+      break;
+    case ParameterType::kText:
+      if (!std::holds_alternative<std::string>(value)) throw wrongType();
+      typed = value;
+      break;
+  }
+  if (range) {
+    const double number = std::holds_alternative<int>(typed) ? std::get<int>(typed) : std::get<double>(typed);
+    if (!range->contains(number)) {
+      throw std::invalid_argument(name + " must be in " + range->toString() + (unit.empty() ? "" : " " + unit) +
+                                  " (got " + sdf_tracker::toText(typed) + ")");
+    }
+  }
+  if (!choices.empty() && std::find(choices.begin(), choices.end(), std::get<std::string>(typed)) == choices.end()) {
+    std::string list;
+    for (const auto& c : choices) list += (list.empty() ? "" : " or ") + c;
+    throw std::invalid_argument(name + ": expected " + list + ", got \"" + std::get<std::string>(typed) + "\"");
+  }
+  if (name == "TrackingSchedule") parseSchedule(std::get<std::string>(typed));  // throws with the rule
+  return typed;
+}
+
+ParameterValue ParameterSpec::parse(const std::string& text) const {
+  switch (type) {
+    case ParameterType::kBool: return checkValue(parseBool(name, text));
+    case ParameterType::kInt: return checkValue(parseInteger(name, text));
+    case ParameterType::kDouble: return checkValue(parseNumber(name, text));
+    case ParameterType::kText: return checkValue(text);
+  }
+  throw std::logic_error("unreachable");
+}
+
+// ---------------------------------------------------------------------------------------------
+// The table
+
 namespace {
 
-std::string toText(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
+constexpr Readers kAll = Readers::kAll;
+constexpr Readers kNodeOnly = Readers::kNodeOnly;
+constexpr bool kLive = true;
+constexpr bool kAtStart = false;
 
-/// A numeric parameter bound to a field through a member accessor.
-template <typename T, typename Accessor>
-ParameterSpec numeric(const std::string& name, const std::string& description, bool live, Accessor field) {
-  return ParameterSpec{
-      name, description, live,
-      [name, field](Settings& s, const std::string& text) {
-        if constexpr (std::is_integral_v<T>) field(s) = parseInteger(name, text);
-        else field(s) = static_cast<T>(parseNumber(name, text));
-      },
-      [field](const Settings& s) { return toText(static_cast<double>(field(s))); }};
-}
+Range closed(double low, double high) { return {low, high, false, false}; }
+Range leftOpen(double low, double high) { return {low, high, true, false}; }
+Range rightOpen(double low, double high) { return {low, high, false, true}; }
 
-/// A true/false parameter bound to a bool field.
-template <typename Accessor>
-ParameterSpec flag(const std::string& name, const std::string& description, bool live, Accessor field) {
-  return ParameterSpec{name, description, live,
-                       [name, field](Settings& s, const std::string& text) { field(s) = parseBool(name, text); },
-                       [field](const Settings& s) { return std::string(field(s) ? "true" : "false"); }};
+PresetDefaults same(const ParameterValue& value) { return {value, value, value}; }
+
+/// A row whose value lives in one field of type T, reached through `field(settings)`.
+template <typename T, typename Field>
+ParameterSpec bound(std::string name, std::string unit, std::string description, std::optional<Range> range,
+                    PresetDefaults defaults, bool live, Readers readers, Field field) {
+  ParameterType type;
+  if constexpr (std::is_same_v<T, bool>) type = ParameterType::kBool;
+  else if constexpr (std::is_integral_v<T>) type = ParameterType::kInt;
+  else type = ParameterType::kDouble;
+  using Stored = std::conditional_t<std::is_same_v<T, bool>, bool, std::conditional_t<std::is_integral_v<T>, int, double>>;
+  return ParameterSpec{std::move(name), type, std::move(unit), std::move(description), range, {}, std::move(defaults),
+                       live, readers,
+                       [field](Settings& s, const ParameterValue& v) { field(s) = static_cast<T>(std::get<Stored>(v)); },
+                       [field](const Settings& s) { return ParameterValue(static_cast<Stored>(field(s))); }};
 }
 
 std::vector<ParameterSpec> buildTable() {
   using S = Settings;
   std::vector<ParameterSpec> t;
   // The reference release's parameters, with their reference meaning.
-  t.push_back(numeric<double>("CellSize", "voxel edge length [m]", false,
-                              [](auto& s) -> auto& { return s.pipeline.volume.voxel_size_m; }));
-  t.push_back(numeric<int>("GridSizeX", "voxels along x", false, [](auto& s) -> auto& { return s.pipeline.volume.dims.x(); }));
-  t.push_back(numeric<int>("GridSizeY", "voxels along y", false, [](auto& s) -> auto& { return s.pipeline.volume.dims.y(); }));
-  t.push_back(numeric<int>("GridSizeZ", "voxels along z", false, [](auto& s) -> auto& { return s.pipeline.volume.dims.z(); }));
-  t.push_back(numeric<double>("PositiveTruncationDistance", "Dmax [m], > 0", false,
-                              [](auto& s) -> auto& { return s.pipeline.volume.positive_truncation_m; }));
-  t.push_back(numeric<double>("NegativeTruncationDistance", "Dmin [m], < 0", true,
-                              [](auto& s) -> auto& { return s.pipeline.integrator.negative_truncation_m; }));
-  t.push_back(numeric<double>("RobustStatisticCoefficient", "Huber k as a fraction of Dmax", true,
-                              [](auto& s) -> auto& { return s.pipeline.tracker.huber_coefficient; }));
-  t.push_back(numeric<double>("Regularization", "Tikhonov alpha per iteration", true,
-                              [](auto& s) -> auto& { return s.pipeline.tracker.regularization; }));
-  t.push_back(numeric<double>("MinPoseChangeToFuseData", "fuse only after moving this much (m and rad)", true,
-                              [](auto& s) -> auto& { return s.pipeline.min_pose_change_to_fuse; }));
-  t.push_back(numeric<double>("ConvergenceCondition", "a level ends when |delta xi| is below this", true,
-                              [](auto& s) -> auto& { return s.pipeline.tracker.convergence_threshold; }));
-  t.push_back(numeric<int>("MaximumRaycastSteps", "steps when ray casting from a measured depth", true,
-                           [](auto& s) -> auto& { return s.pipeline.raycast.max_refinement_steps; }));
-  t.push_back(numeric<double>("MaxWeight", "Wmax, the weight cap", true,
-                              [](auto& s) -> auto& { return s.pipeline.integrator.max_weight; }));
-  t.push_back(numeric<int>("ImageWidth", "image width (640, 320 or 160)", false, [](auto& s) -> auto& { return s.image_width; }));
-  t.push_back(numeric<int>("ImageHeight", "image height (480, 240 or 120)", false,
-                           [](auto& s) -> auto& { return s.image_height; }));
-  t.push_back(numeric<double>("FocalLengthX", "fx at 640x480 [px]", false, [](auto& s) -> auto& { return s.camera_vga.fx; }));
-  t.push_back(numeric<double>("FocalLengthY", "fy at 640x480 [px]", false, [](auto& s) -> auto& { return s.camera_vga.fy; }));
-  t.push_back(numeric<double>("CenterPointX", "cx at 640x480 [px]", false, [](auto& s) -> auto& { return s.camera_vga.cx; }));
-  t.push_back(numeric<double>("CenterPointY", "cy at 640x480 [px]", false, [](auto& s) -> auto& { return s.camera_vga.cy; }));
+  t.push_back(bound<double>("CellSize", "m", "voxel edge length", closed(0.001, 1.0), {0.02, 0.03, 0.02}, kAtStart,
+                            kAll, [](auto& s) -> auto& { return s.pipeline.volume.voxel_size_m; }));
+  const char* axes[] = {"X", "Y", "Z"};
+  for (int axis = 0; axis < 3; ++axis) {
+    t.push_back(bound<int>(std::string("GridSize") + axes[axis], "voxels",
+                           std::string("voxels along ") + char('x' + axis), closed(8, 2048), {256, 200, 200}, kAtStart,
+                           kAll, [axis](auto& s) -> auto& { return s.pipeline.volume.dims[axis]; }));
+  }
+  t.push_back(bound<double>("PositiveTruncationDistance", "m", "Dmax: distances are clamped to at most this",
+                            leftOpen(0.0, 10.0), {0.1, 0.1, 0.08}, kAtStart, kAll,
+                            [](auto& s) -> auto& { return s.pipeline.volume.positive_truncation_m; }));
+  t.push_back(bound<double>("NegativeTruncationDistance", "m", "Dmin: voxels further behind the surface are not updated",
+                            rightOpen(-10.0, 0.0), {-0.1, -0.06, -0.04}, kLive, kAll,
+                            [](auto& s) -> auto& { return s.pipeline.integrator.negative_truncation_m; }));
+  t.push_back(bound<double>("RobustStatisticCoefficient", "", "Huber threshold as a fraction of Dmax",
+                            leftOpen(0.0, 10.0), same(0.02), kLive, kAll,
+                            [](auto& s) -> auto& { return s.pipeline.tracker.huber_coefficient; }));
+  t.push_back(bound<double>("Regularization", "", "Tikhonov alpha added per iteration", closed(0.0, 1e6), same(0.01),
+                            kLive, kAll, [](auto& s) -> auto& { return s.pipeline.tracker.regularization; }));
+  t.push_back(bound<double>("MinPoseChangeToFuseData", "m+rad", "fuse only after the camera moved this much",
+                            closed(0.0, 10.0), {0.0, 0.0, 0.01}, kLive, kAll,
+                            [](auto& s) -> auto& { return s.pipeline.min_pose_change_to_fuse; }));
+  t.push_back(bound<double>("ConvergenceCondition", "", "a level ends when |delta xi| falls below this",
+                            closed(0.0, 1.0), same(1e-4), kLive, kAll,
+                            [](auto& s) -> auto& { return s.pipeline.tracker.convergence_threshold; }));
+  t.push_back(bound<int>("MaximumRaycastSteps", "", "steps when refining a measured depth (image_denoised)",
+                         closed(0, 10000), same(12), kLive, kAll,
+                         [](auto& s) -> auto& { return s.pipeline.raycast.max_refinement_steps; }));
+  t.push_back(bound<double>("MaxWeight", "", "Wmax, the weight cap of the running average", leftOpen(0.0, 1e9),
+                            same(64.0), kLive, kAll, [](auto& s) -> auto& { return s.pipeline.integrator.max_weight; }));
+  t.push_back(bound<int>("ImageWidth", "px", "image width (640, 320 or 160); scales the intrinsics", closed(1, 10000),
+                         same(640), kAtStart, kNodeOnly, [](auto& s) -> auto& { return s.image_width; }));
+  t.push_back(bound<int>("ImageHeight", "px", "image height (480, 240 or 120)", closed(1, 10000), same(480), kAtStart,
+                         kNodeOnly, [](auto& s) -> auto& { return s.image_height; }));
+  t.push_back(bound<double>("FocalLengthX", "px", "fx at 640x480; set: used instead of camera_info", closed(1.0, 1e5),
+                            same(520.0), kAtStart, kNodeOnly, [](auto& s) -> auto& { return s.camera_vga.fx; }));
+  t.push_back(bound<double>("FocalLengthY", "px", "fy at 640x480", closed(1.0, 1e5), same(520.0), kAtStart, kNodeOnly,
+                            [](auto& s) -> auto& { return s.camera_vga.fy; }));
+  t.push_back(bound<double>("CenterPointX", "px", "cx at 640x480", closed(0.0, 1e5), same(319.5), kAtStart, kNodeOnly,
+                            [](auto& s) -> auto& { return s.camera_vga.cx; }));
+  t.push_back(bound<double>("CenterPointY", "px", "cy at 640x480", closed(0.0, 1e5), same(239.5), kAtStart, kNodeOnly,
+                            [](auto& s) -> auto& { return s.camera_vga.cy; }));
   // This package's own parameters.
   t.push_back(ParameterSpec{
-      "TrackingSchedule", "coarse-to-fine levels, stride x iterations, e.g. 4x12,2x6,1x2", true,
-      [](S& s, const std::string& text) { s.pipeline.tracker.levels = parseSchedule(text); },
-      [](const S& s) { return formatSchedule(s.pipeline.tracker.levels); }});
-  t.push_back(numeric<double>("MinDepth", "nearer depth is no measurement [m]", true,
-                              [](auto& s) -> auto& { return s.pipeline.min_depth_m; }));
-  t.push_back(numeric<double>("MaxDepth", "further depth is no measurement [m]", true,
-                              [](auto& s) -> auto& { return s.pipeline.max_depth_m; }));
+      "TrackingSchedule", ParameterType::kText, "", "coarse-to-fine levels, stride x iterations, e.g. 4x12,2x6,1x2",
+      std::nullopt, {}, {std::string("4x12,2x8"), std::string("4x12,2x6,1x2"), std::string("4x12,2x8,1x2")},
+      kLive, kAll, [](S& s, const ParameterValue& v) { s.pipeline.tracker.levels = parseSchedule(std::get<std::string>(v)); },
+      [](const S& s) { return ParameterValue(formatSchedule(s.pipeline.tracker.levels)); }});
+  t.push_back(bound<double>("MinDepth", "m", "nearer depth is no measurement", closed(0.0, 100.0), same(0.4), kLive,
+                            kAll, [](auto& s) -> auto& { return s.pipeline.min_depth_m; }));
+  t.push_back(bound<double>("MaxDepth", "m", "further depth is no measurement", leftOpen(0.0, 100.0), same(8.0), kLive,
+                            kAll, [](auto& s) -> auto& { return s.pipeline.max_depth_m; }));
   t.push_back(ParameterSpec{
-      "DepthWeighting", "fusion weights: constant (rolling average) or sensor (inverse depth-noise variance)", true,
-      [](S& s, const std::string& text) {
-        if (text == "constant") s.pipeline.integrator.weighting = MeasurementWeighting::kConstant;
-        else if (text == "sensor") s.pipeline.integrator.weighting = MeasurementWeighting::kSensorNoise;
-        else throw std::invalid_argument("DepthWeighting: expected constant or sensor, got \"" + text + "\"");
+      "DepthWeighting", ParameterType::kText, "",
+      "fusion weights: constant (rolling average) or sensor (inverse depth-noise variance)", std::nullopt,
+      {"constant", "sensor"}, {std::string("sensor"), std::string("constant"), std::string("constant")}, kLive, kAll,
+      [](S& s, const ParameterValue& v) {
+        s.pipeline.integrator.weighting =
+            std::get<std::string>(v) == "sensor" ? MeasurementWeighting::kSensorNoise : MeasurementWeighting::kConstant;
       },
       [](const S& s) {
-        return std::string(s.pipeline.integrator.weighting == MeasurementWeighting::kConstant ? "constant" : "sensor");
+        return ParameterValue(
+            std::string(s.pipeline.integrator.weighting == MeasurementWeighting::kConstant ? "constant" : "sensor"));
       }});
-  t.push_back(flag("TrackingSensorWeights", "weight tracked points by depth noise", true,
-                   [](auto& s) -> auto& { return s.pipeline.tracker.sensor_weights; }));
-  t.push_back(flag("NormalizeResiduals", "divide residuals by the field's gradient norm (metric distances)", true,
-                   [](auto& s) -> auto& { return s.pipeline.tracker.normalize_by_gradient; }));
-  t.push_back(flag("CompactVoxels", "4-byte voxels (half the memory; distance and weight quantised)", false,
-                   [](auto& s) -> auto& { return s.pipeline.volume.compact_voxels; }));
-  t.push_back(numeric<int>("MinValidPoints", "fewer tracked points than this: too_few_points", true,
-                           [](auto& s) -> auto& { return s.pipeline.tracker.min_valid_points; }));
-  t.push_back(numeric<double>("MinInverseCondition", "below this the geometry is degenerate", true,
-                              [](auto& s) -> auto& { return s.pipeline.tracker.min_inverse_condition; }));
-  t.push_back(numeric<int>("ResetAfterFailures", "clear the map after this many failed frames in a row; 0 never", true,
-                           [](auto& s) -> auto& { return s.pipeline.reset_after_failures; }));
-  t.push_back(numeric<double>("InitialCameraX", "first camera's place in the grid along x (fraction)", false,
-                              [](auto& s) -> auto& { return s.pipeline.initial_camera_in_grid.x(); }));
-  t.push_back(numeric<double>("InitialCameraY", "first camera's place in the grid along y (fraction)", false,
-                              [](auto& s) -> auto& { return s.pipeline.initial_camera_in_grid.y(); }));
-  t.push_back(numeric<double>("InitialCameraZ", "first camera's place in the grid along z (fraction)", false,
-                              [](auto& s) -> auto& { return s.pipeline.initial_camera_in_grid.z(); }));
+  t.push_back(bound<bool>("TrackingSensorWeights", "", "weight tracked points by depth noise", {}, {true, false, false},
+                          kLive, kAll, [](auto& s) -> auto& { return s.pipeline.tracker.sensor_weights; }));
+  t.push_back(bound<bool>("NormalizeResiduals", "", "divide residuals by the field's gradient norm (metric distances)",
+                          {}, {true, false, false}, kLive, kAll,
+                          [](auto& s) -> auto& { return s.pipeline.tracker.normalize_by_gradient; }));
+  t.push_back(bound<bool>("CompactVoxels", "", "4-byte voxels (half the memory; distance and weight quantised)", {},
+                          same(false), kAtStart, kAll, [](auto& s) -> auto& { return s.pipeline.volume.compact_voxels; }));
+  t.push_back(bound<int>("MinValidPoints", "", "fewer tracked points than this: too_few_points", closed(6, 1e8),
+                         same(200), kLive, kAll, [](auto& s) -> auto& { return s.pipeline.tracker.min_valid_points; }));
+  t.push_back(bound<double>("MinInverseCondition", "", "below this the geometry is degenerate", closed(0.0, 1.0),
+                            same(1e-4), kLive, kAll,
+                            [](auto& s) -> auto& { return s.pipeline.tracker.min_inverse_condition; }));
+  t.push_back(bound<bool>("MotionPrediction", "",
+                          "start tracking from a constant-velocity prediction scaled to the time since the last frame",
+                          {}, {true, false, false}, kLive, kAll,
+                          [](auto& s) -> auto& { return s.pipeline.predict_motion; }));
+  t.push_back(bound<int>("ResetAfterFailures", "frames", "clear the map after this many failed frames in a row; 0 never",
+                         closed(0, 1e6), same(0), kLive, kAll,
+                         [](auto& s) -> auto& { return s.pipeline.reset_after_failures; }));
+  for (int axis = 0; axis < 3; ++axis) {
+    t.push_back(bound<double>(std::string("InitialCamera") + axes[axis], "",
+                              std::string("first camera's place in the grid along ") + char('x' + axis) +
+                                  " (fraction of the extent)",
+                              closed(-1.0, 2.0), same(axis == 2 ? 0.0 : 0.5), kAtStart, kAll,
+                              [axis](auto& s) -> auto& { return s.pipeline.initial_camera_in_grid[axis]; }));
+  }
   return t;
 }
 
 }  // namespace
-
-std::vector<std::string> Settings::validate() const {
-  Violations v;
-  v.merge("", pipeline.validate());
-  v.merge("camera: ", camera_vga.validate());
-  try {
-    camera();
-  } catch (const std::invalid_argument& e) {
-    v.require(false, std::string("ImageWidth/ImageHeight: ") + e.what());
-  }
-  return v.list();
-}
 
 const std::vector<ParameterSpec>& parameterTable() {
   static const std::vector<ParameterSpec> table = buildTable();
@@ -155,27 +305,80 @@ const ParameterSpec* findParameter(const std::string& name) {
   return it == table.end() ? nullptr : &*it;
 }
 
-void setParameter(Settings* settings, const std::string& name, const std::string& value) {
+void setParameter(Settings* settings, const std::string& name, const ParameterValue& value) {
   const ParameterSpec* spec = findParameter(name);
   if (!spec) throw std::invalid_argument("unknown parameter \"" + name + "\"");
-  spec->set(*settings, value);
+  spec->set(*settings, spec->checkValue(value));
 }
+
+void setParameterFromText(Settings* settings, const std::string& name, const std::string& text) {
+  const ParameterSpec* spec = findParameter(name);
+  if (!spec) throw std::invalid_argument("unknown parameter \"" + name + "\"");
+  spec->set(*settings, spec->parse(text));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Settings
+
+std::vector<std::string> Settings::validate() const {
+  Violations v;
+  for (const ParameterSpec& spec : parameterTable()) {
+    try {
+      spec.checkValue(spec.get(*this));
+    } catch (const std::invalid_argument& e) {
+      v.require(false, e.what());
+    }
+  }
+  const PipelineConfig& p = pipeline;
+  auto text = [](double value) { return toText(value); };
+  if (!(p.max_depth_m > p.min_depth_m)) {
+    v.require(false, "MaxDepth (" + text(p.max_depth_m) + " m) must be greater than MinDepth (" + text(p.min_depth_m) +
+                         " m)");
+  }
+  if (p.volume.positive_truncation_m < p.volume.voxel_size_m || -p.integrator.negative_truncation_m < p.volume.voxel_size_m) {
+    v.require(false, "the truncation band (NegativeTruncationDistance " + text(p.integrator.negative_truncation_m) +
+                         " m, PositiveTruncationDistance " + text(p.volume.positive_truncation_m) +
+                         " m) must reach at least one CellSize (" + text(p.volume.voxel_size_m) +
+                         " m) on each side of the surface");
+  }
+  if (p.volume.compact_voxels && p.integrator.max_weight > VoxelCodec<CompactVoxel>::kMaxWeight) {
+    v.require(false, "MaxWeight must be at most " + text(VoxelCodec<CompactVoxel>::kMaxWeight) +
+                         " with CompactVoxels=true (got " + text(p.integrator.max_weight) + ")");
+  }
+  try {
+    camera();
+  } catch (const std::invalid_argument& e) {
+    v.require(false, std::string("ImageWidth/ImageHeight: ") + e.what());
+  }
+  // The components' own checks name struct fields; with the table's rules above they only speak
+  // for fields the table does not hold (set in code, not by a user).
+  if (v.list().empty()) v.merge("", pipeline.validate());
+  return v.list();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Schedules and presets
 
 std::vector<PyramidLevel> parseSchedule(const std::string& text) {
   std::vector<PyramidLevel> levels;
   std::istringstream in(text);
   std::string item;
+  const std::string rule = "TrackingSchedule: expected levels of stride x iterations (stride 1 to 64, iterations 1 to "
+                           "1000) like 4x12,2x6,1x2, got \"" + text + "\"";
   while (std::getline(in, item, ',')) {
     const size_t x = item.find('x');
+    if (x == std::string::npos) throw std::invalid_argument(rule);
     try {
-      if (x == std::string::npos) throw std::invalid_argument("");
-      levels.push_back({parseInteger("stride", item.substr(0, x)), parseInteger("iterations", item.substr(x + 1))});
+      const PyramidLevel level{parseInteger("stride", item.substr(0, x)), parseInteger("iterations", item.substr(x + 1))};
+      if (level.stride < 1 || level.stride > 64 || level.max_iterations < 1 || level.max_iterations > 1000) {
+        throw std::invalid_argument("");
+      }
+      levels.push_back(level);
     } catch (const std::invalid_argument&) {
-      throw std::invalid_argument("TrackingSchedule: expected stride x iterations like 4x12,2x6,1x2, got \"" + text +
-                                  "\"");
+      throw std::invalid_argument(rule);
     }
   }
-  if (levels.empty()) throw std::invalid_argument("TrackingSchedule: empty schedule \"" + text + "\"");
+  if (levels.empty()) throw std::invalid_argument(rule);
   return levels;
 }
 
@@ -188,39 +391,14 @@ std::string formatSchedule(const std::vector<PyramidLevel>& levels) {
 std::vector<std::string> presetNames() { return {"default", "paper", "reference"}; }
 
 Settings preset(const std::string& name) {
-  Settings s;  // the struct defaults are the reference release's node defaults
-  PipelineConfig& p = s.pipeline;
-  if (name == "reference") {
-    // The reference release's launch file: 200^3 voxels of 2 cm, truncation 0.08 / -0.04, 12/8/2.
-    p.volume.dims = Eigen::Vector3i(200, 200, 200);
-    p.volume.voxel_size_m = 0.02;
-    p.volume.positive_truncation_m = 0.08;
-    p.integrator.negative_truncation_m = -0.04;
-    p.tracker.levels = {{4, 12}, {2, 8}, {1, 2}};
-    p.min_pose_change_to_fuse = 0.01;
-  } else if (name == "paper") {
-    // Table II: 3 cm voxels, truncation 0.1 / -0.06, strides 4/2/1 with 12/6/2 iterations.
-    p.volume.dims = Eigen::Vector3i(200, 200, 200);
-    p.volume.voxel_size_m = 0.03;
-    p.volume.positive_truncation_m = 0.1;
-    p.integrator.negative_truncation_m = -0.06;
-    p.tracker.levels = {{4, 12}, {2, 6}, {1, 2}};
-  } else if (name == "default") {
-    // The paper's algorithm with three measured improvements: depth-noise weights in fusion and
-    // tracking, residuals normalised by the field's gradient, and a symmetric truncation band
-    // (noise behind the surface is not cut off more than noise in front of it).
-    p.volume.dims = Eigen::Vector3i(256, 256, 256);
-    p.volume.voxel_size_m = 0.02;
-    p.volume.positive_truncation_m = 0.1;
-    p.integrator.negative_truncation_m = -0.1;
-    p.integrator.weighting = MeasurementWeighting::kSensorNoise;
-    p.tracker.sensor_weights = true;
-    p.tracker.normalize_by_gradient = true;
-    p.tracker.levels = {{4, 12}, {2, 6}, {1, 2}};
-  } else {
-    throw std::invalid_argument("unknown preset \"" + name + "\" (known: default, paper, reference)");
-  }
-  return s;
+  Preset which;
+  if (name == "default") which = Preset::kDefault;
+  else if (name == "paper") which = Preset::kPaper;
+  else if (name == "reference") which = Preset::kReference;
+  else throw std::invalid_argument("unknown preset \"" + name + "\" (known: default, paper, reference)");
+  Settings settings;
+  for (const ParameterSpec& spec : parameterTable()) spec.set(settings, spec.checkValue(spec.defaults.of(which)));
+  return settings;
 }
 
 }  // namespace sdf_tracker

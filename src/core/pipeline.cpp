@@ -44,6 +44,7 @@ std::vector<std::string> PipelineConfig::validate() const {
                   " with compact voxels (got " + std::to_string(integrator.max_weight) + ")");
   }
   v.requireNonNegative("reset_after_failures", reset_after_failures);
+  v.requirePositive("max_prediction_gap_s", max_prediction_gap_s);
   if (volume.positive_truncation_m > 0.0 && integrator.negative_truncation_m < 0.0) {
     // The tracker needs samples on both sides of the surface: at least one voxel each way.
     std::ostringstream s;
@@ -69,17 +70,19 @@ SdfPipeline::SdfPipeline(const PipelineConfig& config) : config_(config) {
 
 void SdfPipeline::reset() {
   volume_->clear();
-  T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
+  T_W_C_ = T_W_C_last_fused_ = T_W_C_previous_ = Eigen::Isometry3d::Identity();
   map_initialised_ = false;
   consecutive_failures_ = 0;
+  tracked_since_start_ = 0;
 }
 
 void SdfPipeline::setVolume(TsdfVolume volume) {
   volume_ = std::make_unique<TsdfVolume>(std::move(volume));
   config_.volume = volume_->config();
-  T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
+  T_W_C_ = T_W_C_last_fused_ = T_W_C_previous_ = Eigen::Isometry3d::Identity();
   map_initialised_ = true;
   consecutive_failures_ = 0;
+  tracked_since_start_ = 0;
 }
 
 void SdfPipeline::updateConfig(const PipelineConfig& candidate) {
@@ -107,7 +110,24 @@ DepthImage SdfPipeline::filterDepth(const DepthImage& depth) const {
   return filtered;
 }
 
-FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCamera& camera) {
+Eigen::Isometry3d SdfPipeline::predictPose(double timestamp_s) const {
+  if (!config_.predict_motion || tracked_since_start_ < 2 || consecutive_failures_ > 0) return T_W_C_;
+  // Frames without times count as evenly spaced.
+  double ratio = 1.0;
+  if (std::isfinite(timestamp_s) && std::isfinite(time_last_s_) && std::isfinite(time_previous_s_)) {
+    const double gap_s = timestamp_s - time_last_s_, last_gap_s = time_last_s_ - time_previous_s_;
+    if (!(gap_s > 0.0 && last_gap_s > 0.0) || gap_s > config_.max_prediction_gap_s) return T_W_C_;
+    ratio = gap_s / last_gap_s;
+  }
+  const Eigen::Isometry3d motion = T_W_C_previous_.inverse() * T_W_C_;  // in the last camera's frame
+  const Eigen::AngleAxisd rotation(motion.linear());
+  Eigen::Isometry3d scaled = Eigen::Isometry3d::Identity();
+  scaled.linear() = Eigen::AngleAxisd(rotation.angle() * ratio, rotation.axis()).toRotationMatrix();
+  scaled.translation() = motion.translation() * ratio;
+  return T_W_C_ * scaled;
+}
+
+FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s) {
   FrameReport report;
   report.track.T_W_C = T_W_C_;
   if (depth.width() != camera.width || depth.height() != camera.height || depth.empty()) {
@@ -135,6 +155,7 @@ FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCame
     report.reset = true;
   }
 
+  const Eigen::Isometry3d T_W_C_before = T_W_C_;
   if (!map_initialised_) {
     report.track.status = TrackStatus::kOk;
     report.track.T_W_C = T_W_C_;
@@ -142,7 +163,13 @@ FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCame
     report.initialised_map = true;
   } else {
     const auto start = std::chrono::steady_clock::now();
-    report.track = tracker_->track(filtered, camera, *volume_, T_W_C_);
+    const Eigen::Isometry3d predicted = predictPose(timestamp_s);
+    report.track = tracker_->track(filtered, camera, *volume_, predicted);
+    if (!report.track.ok() && !predicted.isApprox(T_W_C_)) {
+      // The prediction may have led astray (the camera stopped or turned): try from the last pose.
+      TrackResult from_last = tracker_->track(filtered, camera, *volume_, T_W_C_);
+      if (from_last.ok()) report.track = std::move(from_last);
+    }
     report.tracking_ms = millisecondsSince(start);
     const bool pose_usable =
         report.track.status == TrackStatus::kOk || report.track.status == TrackStatus::kNotConverged;
@@ -153,6 +180,11 @@ FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCame
     }
     consecutive_failures_ = 0;
   }
+  // A tracked pose: the motion model's history.
+  T_W_C_previous_ = T_W_C_before;
+  time_previous_s_ = time_last_s_;
+  time_last_s_ = timestamp_s;
+  ++tracked_since_start_;
 
   const Eigen::Isometry3d motion = T_W_C_last_fused_.inverse() * T_W_C_;
   const double change = std::hypot(motion.translation().norm(), rotationAngle(motion));

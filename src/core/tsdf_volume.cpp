@@ -1,6 +1,8 @@
 #include "sdf_tracker/core/tsdf_volume.h"
 
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "sdf_tracker/core/validation.h"
 
@@ -47,6 +49,21 @@ void TsdfVolume::clear() {
     std::vector<CompactVoxel>().swap(compact_);
     voxels_.assign(voxel_count_, unseen);
   }
+}
+
+void TsdfVolume::copySlabsFrom(const TsdfVolume& source, int k_begin, int k_end) {
+  const VolumeConfig& a = config_;
+  const VolumeConfig& b = source.config_;
+  if (a.dims != b.dims || a.voxel_size_m != b.voxel_size_m || a.origin_W != b.origin_W ||
+      a.positive_truncation_m != b.positive_truncation_m || a.compact_voxels != b.compact_voxels) {
+    throw std::invalid_argument("copySlabsFrom: the volumes differ in geometry or storage");
+  }
+  k_begin = std::max(0, k_begin);
+  k_end = std::min(config_.dims.z(), k_end);
+  if (k_begin >= k_end) return;
+  const size_t first = index(0, 0, k_begin), last = index(0, 0, k_end);
+  if (compact()) std::copy(source.compact_.begin() + first, source.compact_.begin() + last, compact_.begin() + first);
+  else std::copy(source.voxels_.begin() + first, source.voxels_.begin() + last, voxels_.begin() + first);
 }
 
 bool TsdfVolume::locate(const Eigen::Vector3f& p_W, size_t* base, Eigen::Vector3f* frac) const {

@@ -89,14 +89,15 @@ geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T) {
   return pose;
 }
 
-visualization_msgs::Marker toMarker(const sdf_tracker::TriangleMesh& mesh, const std_msgs::Header& header) {
+visualization_msgs::Marker toMarker(const sdf_tracker::TriangleMesh& mesh, const std_msgs::Header& header,
+                                    const Eigen::Isometry3d& T_frame_W) {
   visualization_msgs::Marker marker;
   marker.header = header;
   marker.ns = "sdf_tracker";
   marker.id = 0;
   marker.type = visualization_msgs::Marker::TRIANGLE_LIST;
   marker.action = visualization_msgs::Marker::ADD;
-  marker.pose.orientation.w = 1.0;
+  marker.pose = toPoseMsg(T_frame_W);  // rviz applies it to every vertex
   marker.scale.x = marker.scale.y = marker.scale.z = 1.0;
   marker.color.r = 0.75f;
   marker.color.g = 0.75f;

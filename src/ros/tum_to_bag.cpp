@@ -1,27 +1,80 @@
-// tum_to_bag: converts a TUM-layout depth folder into a rosbag shaped like the TUM RGB-D
-// benchmark's own bags, so the ROS workflow can be tried and tested without downloads.
+// tum_to_bag: converts a TUM-layout folder into a rosbag shaped like the TUM RGB-D benchmark's own
+// bags of 2011, so the ROS workflow can be tried and tested exactly as with a downloaded bag.
 //   rosrun sdf_tracker tum_to_bag SEQUENCE_DIR OUT.bag [--frames N]
-// Writes /camera/depth/image (32FC1 metres), /camera/depth/camera_info, and, when the folder has
-// ground truth, /tf (world -> kinect, as in the TUM bags) plus a latched /tf_static map -> world
-// that puts the ground truth's first pose on the tracker's start pose, so rviz shows both together.
+// As in the benchmark's bags:
+//   /camera/depth/image (32FC1 metres, NaN = no data) + /camera/depth/camera_info,
+//   frame "/openni_depth_optical_frame" (with its leading slash);
+//   /tf as the legacy tf/tfMessage: the ground truth /world -> /kinect at its own rate (when the
+//   folder has groundtruth.txt), and the rigid openni chain /kinect -> /openni_camera ->
+//   /openni_depth_frame -> /openni_depth_optical_frame (and its openni_rgb_* twin) at 30 Hz;
+//   nothing on /tf_static;
+//   /camera/rgb/image_color (rgb8) + /camera/rgb/camera_info when the folder has rgb.txt, and
+//   /imu when it has accelerometer.txt ("timestamp ax ay az", m/s^2, in the depth camera's frame).
+// The bag is written to a temporary file and renamed when complete: a failure leaves no bag.
 
+#include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 
 #include <geometry_msgs/TransformStamped.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <rosbag/bag.h>
 #include <sensor_msgs/CameraInfo.h>
-#include <tf2_msgs/TFMessage.h>
+#include <sensor_msgs/Imu.h>
+#include <sensor_msgs/image_encodings.h>
+#include <tf/tfMessage.h>
 
 #include "../tools/command_line.h"
+#include "sdf_tracker/core/parameters.h"
 #include "sdf_tracker/core/tum_sequence.h"
 #include "sdf_tracker/ros/conversions.h"
 
 namespace {
 
-constexpr const char* kDepthFrame = "openni_depth_optical_frame";
+namespace st = sdf_tracker;
 
-geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T, const ros::Time& stamp, const std::string& parent,
-                                            const std::string& child) {
+constexpr const char* kUsage = "usage: tum_to_bag SEQUENCE_DIR OUT.bag [--frames N]";
+constexpr double kChainRate_hz = 30.0;  ///< as the openni driver re-published its static frames
+
+/// A link of the openni chain: parent, child, transform parent <- child.
+struct Link {
+  std::string parent;
+  std::string child;
+  Eigen::Isometry3d T_parent_child;
+};
+
+Eigen::Isometry3d translation(double x, double y, double z) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(x, y, z);
+  return T;
+}
+
+/// Body frame (x forward, y left, z up) <- optical frame (x right, y down, z forward).
+Eigen::Isometry3d bodyFromOptical() {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  return T;
+}
+
+/// The openni driver's frames, as in the benchmark's bags: depth and colour cameras 2.5 cm apart.
+std::vector<Link> openniChain() {
+  return {{"/kinect", "/openni_camera", Eigen::Isometry3d::Identity()},
+          {"/openni_camera", "/openni_depth_frame", translation(0.0, -0.02, 0.0)},
+          {"/openni_depth_frame", "/openni_depth_optical_frame", bodyFromOptical()},
+          {"/openni_camera", "/openni_rgb_frame", translation(0.0, -0.045, 0.0)},
+          {"/openni_rgb_frame", "/openni_rgb_optical_frame", bodyFromOptical()}};
+}
+
+/// /kinect <- /openni_depth_optical_frame through the chain.
+Eigen::Isometry3d kinectFromDepthOptical(const std::vector<Link>& chain) {
+  return chain[0].T_parent_child * chain[1].T_parent_child * chain[2].T_parent_child;
+}
+
+geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T, const ros::Time& stamp,
+                                            const std::string& parent, const std::string& child) {
   geometry_msgs::TransformStamped tf;
   tf.header.stamp = stamp;
   tf.header.frame_id = parent;
@@ -34,7 +87,7 @@ geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T, const ro
   return tf;
 }
 
-sensor_msgs::CameraInfo toCameraInfo(const sdf_tracker::PinholeCamera& c, const std_msgs::Header& header) {
+sensor_msgs::CameraInfo toCameraInfo(const st::PinholeCamera& c, const std_msgs::Header& header) {
   sensor_msgs::CameraInfo info;
   info.header = header;
   info.width = c.width;
@@ -47,41 +100,144 @@ sensor_msgs::CameraInfo toCameraInfo(const sdf_tracker::PinholeCamera& c, const 
   return info;
 }
 
-int run(int argc, char** argv) {
-  if (argc != 3 && argc != 5) {
-    std::cerr << "usage: tum_to_bag SEQUENCE_DIR OUT.bag [--frames N]\n";
-    return 2;
+/// "timestamp rest..." lines of an optional TUM list file ('#' comments); empty if it is absent.
+std::vector<std::pair<double, std::string>> readTimedLines(const std::string& path) {
+  std::vector<std::pair<double, std::string>> lines;
+  std::ifstream in(path);
+  if (!in) return lines;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    double t;
+    std::string rest;
+    if (!(fields >> t) || !std::isfinite(t)) {
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": expected a timestamp, got \"" + line + "\"");
+    }
+    std::getline(fields >> std::ws, rest);
+    lines.emplace_back(t, rest);
   }
-  sdf_tracker::TumSequence sequence = sdf_tracker::TumSequence::open(argv[1]);
-  if (argc == 5) sequence.truncate(static_cast<size_t>(std::stoul(argv[4])));
+  return lines;
+}
+
+sensor_msgs::Image readColourImage(const std::string& path, const std_msgs::Header& header) {
+  const cv::Mat bgr = cv::imread(path, cv::IMREAD_COLOR);
+  if (bgr.empty()) throw std::runtime_error("cannot read the colour image " + path);
+  cv::Mat rgb;
+  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  sensor_msgs::Image msg;
+  msg.header = header;
+  msg.width = static_cast<uint32_t>(rgb.cols);
+  msg.height = static_cast<uint32_t>(rgb.rows);
+  msg.encoding = sensor_msgs::image_encodings::RGB8;
+  msg.step = msg.width * 3;
+  msg.data.resize(static_cast<size_t>(msg.step) * msg.height);
+  for (int v = 0; v < rgb.rows; ++v) std::copy(rgb.ptr<uint8_t>(v), rgb.ptr<uint8_t>(v) + msg.step, &msg.data[v * msg.step]);
+  return msg;
+}
+
+int run(int argc, char** argv) {
+  std::vector<std::string> positional;
+  std::vector<char*> options{argv[0]};
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.rfind("--", 0) == 0) {
+      options.push_back(argv[i]);
+      if (i + 1 < argc) options.push_back(argv[++i]);
+    } else {
+      positional.push_back(arg);
+    }
+  }
+  if (positional.size() != 2) throw std::invalid_argument(std::string("expected SEQUENCE_DIR and OUT.bag\n") + kUsage);
+  const st::tools::CommandLine args(static_cast<int>(options.size()), options.data(), {"frames"}, {});
+  st::TumSequence sequence = st::TumSequence::open(positional[0]);
+  if (args.has("frames")) {
+    const int frames = st::parseInteger("--frames", args.get("frames"));
+    if (frames < 1) throw std::invalid_argument("--frames must be at least 1 (got " + args.get("frames") + ")");
+    sequence.truncate(static_cast<size_t>(frames));
+  }
+  if (sequence.size() == 0) throw std::runtime_error(positional[0] + "/depth.txt lists no frame");
+  const std::string out = positional[1];
+  const std::string temporary = out + ".partial";
+
   // ros::Time(0) means "no time" to tf: sequences that start at 0 s are shifted by this much.
   const double offset_s = sequence.timestamp(0) < 1.0 ? 1.0 : 0.0;
-  rosbag::Bag bag(argv[2], rosbag::bagmode::Write);
+  const double t_end = sequence.timestamp(sequence.size() - 1);
+  const std::vector<Link> chain = openniChain();
+  const Eigen::Isometry3d T_depth_kinect = kinectFromDepthOptical(chain).inverse();
   const auto& gt = sequence.groundTruth();
-  size_t gt_index = 0;
-  for (size_t i = 0; i < sequence.size(); ++i) {
-    std_msgs::Header header;
-    header.seq = static_cast<uint32_t>(i);
-    header.stamp = ros::Time(sequence.timestamp(i) + offset_s);
-    header.frame_id = kDepthFrame;
-    if (i == 0 && !gt.empty()) {
-      tf2_msgs::TFMessage tf_static;
-      tf_static.transforms.push_back(toTransform(gt.front().T_W_C.inverse(), header.stamp, "map", "world"));
-      bag.write("/tf_static", header.stamp, tf_static);
+  const auto colour = readTimedLines(positional[0] + "/rgb.txt");
+  const auto accelerometer = readTimedLines(positional[0] + "/accelerometer.txt");
+
+  try {
+    rosbag::Bag bag(temporary, rosbag::bagmode::Write);
+    auto stamp = [offset_s](double t) { return ros::Time(t + offset_s); };
+    // Every stream in time order up to each depth frame, so playback interleaves them as recorded.
+    size_t gt_index = 0, colour_index = 0, accel_index = 0;
+    double next_chain_s = std::min(sequence.timestamp(0), gt.empty() ? sequence.timestamp(0) : gt.front().timestamp_s);
+    auto writeUpTo = [&](double until_s) {
+      while (gt_index < gt.size() && gt[gt_index].timestamp_s <= until_s) {
+        tf::tfMessage tf;
+        const ros::Time t = stamp(gt[gt_index].timestamp_s);
+        tf.transforms.push_back(toTransform(gt[gt_index].T_W_C * T_depth_kinect, t, "/world", "/kinect"));
+        bag.write("/tf", t, tf);
+        ++gt_index;
+      }
+      while (next_chain_s <= until_s) {
+        tf::tfMessage tf;
+        const ros::Time t = stamp(next_chain_s);
+        for (const Link& link : chain) tf.transforms.push_back(toTransform(link.T_parent_child, t, link.parent, link.child));
+        bag.write("/tf", t, tf);
+        next_chain_s += 1.0 / kChainRate_hz;
+      }
+      while (accel_index < accelerometer.size() && accelerometer[accel_index].first <= until_s) {
+        std::istringstream fields(accelerometer[accel_index].second);
+        sensor_msgs::Imu imu;
+        imu.header.stamp = stamp(accelerometer[accel_index].first);
+        imu.header.frame_id = "/openni_depth_optical_frame";
+        imu.orientation_covariance[0] = -1.0;  // no orientation
+        imu.angular_velocity_covariance[0] = -1.0;
+        if (!(fields >> imu.linear_acceleration.x >> imu.linear_acceleration.y >> imu.linear_acceleration.z)) {
+          throw std::runtime_error(positional[0] + "/accelerometer.txt: expected \"timestamp ax ay az\"");
+        }
+        bag.write("/imu", imu.header.stamp, imu);
+        ++accel_index;
+      }
+      while (colour_index < colour.size() && colour[colour_index].first <= until_s) {
+        std_msgs::Header header;
+        header.seq = static_cast<uint32_t>(colour_index);
+        header.stamp = stamp(colour[colour_index].first);
+        header.frame_id = "/openni_rgb_optical_frame";
+        const sensor_msgs::Image image = readColourImage(positional[0] + "/" + colour[colour_index].second, header);
+        st::PinholeCamera camera = sequence.camera();
+        camera.width = static_cast<int>(image.width), camera.height = static_cast<int>(image.height);
+        bag.write("/camera/rgb/image_color", header.stamp, image);
+        bag.write("/camera/rgb/camera_info", header.stamp, toCameraInfo(camera, header));
+        ++colour_index;
+      }
+    };
+    for (size_t i = 0; i < sequence.size(); ++i) {
+      writeUpTo(sequence.timestamp(i));
+      std_msgs::Header header;
+      header.seq = static_cast<uint32_t>(i);
+      header.stamp = stamp(sequence.timestamp(i));
+      header.frame_id = "/openni_depth_optical_frame";
+      bag.write("/camera/depth/image", header.stamp, sdf_tracker_ros::toImageMsg(sequence.depth(i), header));
+      bag.write("/camera/depth/camera_info", header.stamp, toCameraInfo(sequence.camera(), header));
     }
-    bag.write("/camera/depth/image", header.stamp, sdf_tracker_ros::toImageMsg(sequence.depth(i), header));
-    bag.write("/camera/depth/camera_info", header.stamp, toCameraInfo(sequence.camera(), header));
-    // Ground truth up to this frame's time, on /tf as world -> kinect.
-    while (gt_index < gt.size() && gt[gt_index].timestamp_s <= sequence.timestamp(i) + 1e-6) {
-      tf2_msgs::TFMessage tf;
-      const ros::Time stamp(gt[gt_index].timestamp_s + offset_s);
-      tf.transforms.push_back(toTransform(gt[gt_index].T_W_C, stamp, "world", "kinect"));
-      bag.write("/tf", stamp, tf);
-      ++gt_index;
-    }
+    writeUpTo(t_end + 0.1);  // the ground truth and chain just past the last frame
+    bag.close();
+  } catch (...) {
+    std::remove(temporary.c_str());
+    throw;
   }
-  bag.close();
-  std::cout << "wrote " << sequence.size() << " frames to " << argv[2];
+  if (std::rename(temporary.c_str(), out.c_str()) != 0) {
+    std::remove(temporary.c_str());
+    throw std::runtime_error("cannot move the finished bag to " + out);
+  }
+  std::cout << "wrote " << sequence.size() << " frames to " << out;
   if (offset_s != 0.0) std::cout << " (stamps shifted by " << offset_s << " s)";
   std::cout << "\n";
   return 0;

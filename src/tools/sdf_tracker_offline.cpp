@@ -92,15 +92,27 @@ int run(int argc, char** argv) {
   for (const std::string& assignment : args.getAll("param")) {
     const size_t eq = assignment.find('=');
     if (eq == std::string::npos) throw std::invalid_argument("--param expects NAME=VALUE, got \"" + assignment + "\"");
-    st::setParameter(&settings, assignment.substr(0, eq), assignment.substr(eq + 1));
+    const std::string name = assignment.substr(0, eq);
+    const st::ParameterSpec* spec = st::findParameter(name);
+    if (spec && spec->readers == st::Readers::kNodeOnly) {
+      throw std::invalid_argument("--param " + name + ": read by the ROS node only; the offline runner takes the "
+                                  "camera from the sequence (intrinsics.txt) or from --intrinsics");
+    }
+    st::setParameterFromText(&settings, name, assignment.substr(eq + 1));
   }
   if (args.has("list-params")) {
+    std::cout << std::left << std::setw(28) << "name" << std::setw(16) << "value" << std::setw(8) << "unit"
+              << std::setw(22) << "range" << std::setw(7) << "live" << "description\n";
     for (const auto& p : st::parameterTable()) {
-      std::cout << std::left << std::setw(28) << p.name << std::setw(16) << p.get(settings) << p.description << "\n";
+      if (p.readers == st::Readers::kNodeOnly) continue;
+      std::string range = p.range ? p.range->toString() : "";
+      for (const auto& choice : p.choices) range += (range.empty() ? "" : "|") + choice;
+      std::cout << std::left << std::setw(28) << p.name << std::setw(16) << st::toText(p.get(settings)) << std::setw(8)
+                << p.unit << std::setw(22) << range << std::setw(7) << (p.live ? "yes" : "no") << p.description << "\n";
     }
     return 0;
   }
-  st::throwIfInvalid("parameters", settings.pipeline.validate());
+  st::throwIfInvalid("parameters", settings.validate());
 #ifdef _OPENMP
   if (args.has("threads")) {
     const int threads = args.getInt("threads", 0);
@@ -145,7 +157,7 @@ int run(int argc, char** argv) {
   const auto start = std::chrono::steady_clock::now();
   for (size_t i = 0; i < sequence.size(); ++i) {
     const st::DepthImage depth = sequence.depth(i);
-    const st::FrameReport report = pipeline.processFrame(depth, camera);
+    const st::FrameReport report = pipeline.processFrame(depth, camera, sequence.timestamp(i));
     const st::TrackResult& t = report.track;
     if (!t.ok()) ++failed;
     trajectory.push_back({sequence.timestamp(i), pipeline.pose()});

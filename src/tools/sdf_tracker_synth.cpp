@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "command_line.h"
+#include "sdf_tracker/core/parameters.h"
 #include "sdf_tracker/core/synthetic.h"
 
 namespace {
@@ -16,6 +17,7 @@ Renders an analytic indoor scene along a scripted camera path, in TUM layout
   --motion NAME      desk (default) | slow | fast | planar | loop
   --frames N         number of frames (default 300, at 30 Hz)
   --seed N           noise seed (default 1)
+  --size WxH         image size: 640x480 (default), 320x240 or 160x120 (freiburg1 intrinsics, scaled)
   --no-noise         exact depth, no Kinect-like noise, dropouts or quantisation
   --disparity-subpixels N   disparity quantisation steps per pixel (default 8; 0 = none)
   --noise-scale S    scale of the axial Gaussian noise (default 1)
@@ -23,7 +25,7 @@ Renders an analytic indoor scene along a scripted camera path, in TUM layout
 
 int run(int argc, char** argv) {
   using namespace sdf_tracker;
-  const tools::CommandLine args(argc, argv, {"output", "motion", "frames", "seed", "disparity-subpixels", "noise-scale"}, {"no-noise", "help"});
+  const tools::CommandLine args(argc, argv, {"output", "motion", "frames", "seed", "size", "disparity-subpixels", "noise-scale"}, {"no-noise", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
     return 0;
@@ -32,6 +34,13 @@ int run(int argc, char** argv) {
   spec.motion = synthetic::parseMotion(args.get("motion", "desk"));
   spec.frames = args.getInt("frames", 300);
   spec.seed = static_cast<uint32_t>(args.getInt("seed", 1));
+  if (args.has("size")) {
+    const std::string size = args.get("size");
+    const size_t x = size.find('x');
+    if (x == std::string::npos) throw std::invalid_argument("--size: expected WxH like 320x240, got \"" + size + "\"");
+    spec.camera = PinholeCamera::tumFreiburg1().scaledTo(parseInteger("--size", size.substr(0, x)),
+                                                         parseInteger("--size", size.substr(x + 1)));
+  }
   spec.noise.enabled = !args.has("no-noise");
   spec.noise.disparity_subpixels = args.getInt("disparity-subpixels", spec.noise.disparity_subpixels);
   spec.noise.axial_noise_scale = args.getDouble("noise-scale", spec.noise.axial_noise_scale);

@@ -8,6 +8,7 @@
 #include <condition_variable>
 #include <map>
 #include <mutex>
+#include <optional>
 
 #include <dynamic_reconfigure/Reconfigure.h>
 #include <geometry_msgs/PoseStamped.h>
@@ -134,7 +135,7 @@ TEST_F(NodeTest, TracksAQvgaBagLikeTheOfflineRunnerAndSurvivesBadInput) {
   st::SdfPipeline offline(settings.pipeline);
   std::vector<st::io::StampedPose> offline_trajectory;
   for (size_t i = 0; i < sequence.size(); ++i) {
-    offline.processFrame(sequence.depth(i), sequence.camera());
+    offline.processFrame(sequence.depth(i), sequence.camera(), sequence.timestamp(i));
     offline_trajectory.push_back({sequence.timestamp(i), offline.pose()});
   }
 
@@ -208,38 +209,90 @@ TEST_F(NodeTest, SaveMeshWritesAPlyThatLoadsBack) {
   EXPECT_GT(mesh.triangles.size(), 1000u);
 }
 
-TEST_F(NodeTest, InvalidReconfigureValuesAreRejected) {
+/// Sends one parameter through dynamic_reconfigure; returns the values the node reports in force.
+std::map<std::string, st::ParameterValue> reconfigure(const std::string& name, const st::ParameterValue& value) {
   dynamic_reconfigure::Reconfigure srv;
-  dynamic_reconfigure::DoubleParameter weight;
-  weight.name = "MaxWeight";
-  weight.value = -5.0;
-  srv.request.config.doubles.push_back(weight);
-  ASSERT_TRUE(ros::service::call("sdf_tracker/set_parameters", srv));
-  for (const auto& p : srv.response.config.doubles) {
-    if (p.name == "MaxWeight") {
-      EXPECT_GT(p.value, 0.0) << "the invalid value must not be in force";
-    }
+  if (const auto* d = std::get_if<double>(&value)) {
+    dynamic_reconfigure::DoubleParameter p;
+    p.name = name, p.value = *d;
+    srv.request.config.doubles.push_back(p);
+  } else if (const auto* i = std::get_if<int>(&value)) {
+    dynamic_reconfigure::IntParameter p;
+    p.name = name, p.value = *i;
+    srv.request.config.ints.push_back(p);
+  } else if (const auto* b = std::get_if<bool>(&value)) {
+    dynamic_reconfigure::BoolParameter p;
+    p.name = name, p.value = *b;
+    srv.request.config.bools.push_back(p);
+  } else {
+    dynamic_reconfigure::StrParameter p;
+    p.name = name, p.value = std::get<std::string>(value);
+    srv.request.config.strs.push_back(p);
   }
-  dynamic_reconfigure::StrParameter schedule;
-  schedule.name = "TrackingSchedule";
-  schedule.value = "not a schedule";
-  srv.request.config = dynamic_reconfigure::Config();
-  srv.request.config.strs.push_back(schedule);
-  ASSERT_TRUE(ros::service::call("sdf_tracker/set_parameters", srv));
-  for (const auto& p : srv.response.config.strs) {
-    if (p.name == "TrackingSchedule") {
-      EXPECT_EQ(p.value, "4x12,2x6,1x2");
-    }
+  std::map<std::string, st::ParameterValue> in_force;
+  if (!ros::service::call("sdf_tracker/set_parameters", srv)) {
+    ADD_FAILURE() << "set_parameters failed";
+    return in_force;
   }
-  // A valid change goes through.
-  weight.value = 32.0;
-  srv.request.config = dynamic_reconfigure::Config();
-  srv.request.config.doubles.push_back(weight);
-  ASSERT_TRUE(ros::service::call("sdf_tracker/set_parameters", srv));
-  for (const auto& p : srv.response.config.doubles) {
-    if (p.name == "MaxWeight") {
-      EXPECT_DOUBLE_EQ(p.value, 32.0);
+  for (const auto& p : srv.response.config.doubles) in_force[p.name] = p.value;
+  for (const auto& p : srv.response.config.ints) in_force[p.name] = static_cast<int>(p.value);
+  for (const auto& p : srv.response.config.bools) in_force[p.name] = static_cast<bool>(p.value);
+  for (const auto& p : srv.response.config.strs) in_force[p.name] = p.value;
+  return in_force;
+}
+
+/// A value other than `current` that the table accepts and that keeps `settings` valid.
+std::optional<st::ParameterValue> anotherValidValue(const st::ParameterSpec& spec, const st::Settings& settings) {
+  std::vector<st::ParameterValue> candidates;
+  const st::ParameterValue current = spec.get(settings);
+  if (const auto* b = std::get_if<bool>(&current)) candidates = {!*b};
+  if (const auto* i = std::get_if<int>(&current)) candidates = {*i + 1, *i - 1};
+  if (const auto* d = std::get_if<double>(&current)) candidates = {*d * 1.1, *d * 0.9, *d + 0.01, *d - 0.01};
+  if (spec.name == "TrackingSchedule") candidates = {std::string("4x10,2x5,1x1")};
+  for (const auto& choice : spec.choices) candidates.push_back(choice);
+  for (const auto& candidate : candidates) {
+    if (candidate == current) continue;
+    st::Settings trial = settings;
+    try {
+      st::setParameter(&trial, spec.name, candidate);
+    } catch (const std::invalid_argument&) {
+      continue;
     }
+    if (trial.validate().empty()) return candidate;
+  }
+  return std::nullopt;
+}
+
+TEST_F(NodeTest, EveryLiveParameterIsReconfigurableAndEveryOutOfRangeValueIsRefused) {
+  // The node runs the default preset with a 160^3 grid (node.test).
+  st::Settings expected = st::preset("default");
+  expected.pipeline.volume.dims = Eigen::Vector3i(160, 160, 160);
+  int live = 0;
+  for (const st::ParameterSpec& spec : st::parameterTable()) {
+    if (!spec.live) continue;
+    ++live;
+    SCOPED_TRACE(spec.name);
+    const st::ParameterValue before = spec.get(expected);
+    if (spec.range) {  // beyond the range: refused, never clamped
+      const double outside = std::isfinite(spec.range->high) && spec.range->high < 1e8 ? spec.range->high * 2 + 1
+                                                                                     : spec.range->low - 1;
+      const st::ParameterValue bad = spec.type == st::ParameterType::kInt ? st::ParameterValue(static_cast<int>(outside))
+                                                                         : st::ParameterValue(outside);
+      EXPECT_EQ(reconfigure(spec.name, bad)[spec.name], before) << "out-of-range value " << st::toText(bad);
+    }
+    if (spec.type == st::ParameterType::kText) {
+      EXPECT_EQ(reconfigure(spec.name, std::string("not a value"))[spec.name], before);
+    }
+    const std::optional<st::ParameterValue> valid = anotherValidValue(spec, expected);
+    ASSERT_TRUE(valid.has_value()) << "no valid alternative found to try";
+    EXPECT_EQ(reconfigure(spec.name, *valid)[spec.name], *valid) << "valid value " << st::toText(*valid);
+    st::setParameter(&expected, spec.name, *valid);
+  }
+  EXPECT_GT(live, 10);
+  // A refused change reports what is in force in the pipeline: every accepted value is there.
+  const auto in_force = reconfigure("MaxWeight", -5.0);
+  for (const st::ParameterSpec& spec : st::parameterTable()) {
+    if (spec.live) EXPECT_EQ(in_force.at(spec.name), spec.get(expected)) << spec.name;
   }
 }
 

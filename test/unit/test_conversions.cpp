@@ -1,5 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <limits>
+#include <map>
+#include <set>
+
 #include <cmath>
 #include <cstring>
 
@@ -8,6 +12,7 @@
 #include "sdf_tracker/SdfTrackerConfig.h"
 #include "sdf_tracker/core/parameters.h"
 #include "sdf_tracker/ros/conversions.h"
+#include "sdf_tracker/ros/parameters.h"
 
 namespace sdf_tracker_ros {
 namespace {
@@ -61,12 +66,62 @@ TEST(Conversions, UnreadableImagesNameTheProblem) {
   EXPECT_DOUBLE_EQ(toCamera(info).cx, 319.5);
 }
 
-TEST(Reconfigure, EveryLiveParameterIsInTheCoreTableAndMarkedLive) {
+TEST(Reconfigure, TheCfgListsExactlyTheLiveRowsOfTheTableWithTheirTypesAndDefaultsAndNoClampingRange) {
+  namespace st = sdf_tracker;
+  const st::Settings defaults = st::preset("default");
+  const sdf_tracker::SdfTrackerConfig cfg_defaults = sdf_tracker::SdfTrackerConfig::__getDefault__();
+  const sdf_tracker::SdfTrackerConfig cfg_min = sdf_tracker::SdfTrackerConfig::__getMin__();
+  const sdf_tracker::SdfTrackerConfig cfg_max = sdf_tracker::SdfTrackerConfig::__getMax__();
+  std::map<std::string, st::ParameterValue> cfg_default_values;
+  for (const auto& [name, value] : reconfigureValues(cfg_defaults)) cfg_default_values[name] = value;
+  std::map<std::string, st::ParameterValue> cfg_min_values, cfg_max_values;
+  for (const auto& [name, value] : reconfigureValues(cfg_min)) cfg_min_values[name] = value;
+  for (const auto& [name, value] : reconfigureValues(cfg_max)) cfg_max_values[name] = value;
+
+  std::set<std::string> in_cfg;
   for (const auto& description : sdf_tracker::SdfTrackerConfig::__getParamDescriptions__()) {
-    const sdf_tracker::ParameterSpec* spec = sdf_tracker::findParameter(description->name);
+    in_cfg.insert(description->name);
+    const st::ParameterSpec* spec = st::findParameter(description->name);
     ASSERT_NE(spec, nullptr) << description->name << " is in cfg/SdfTracker.cfg but not in the parameter table";
-    EXPECT_TRUE(spec->live) << description->name << " is reconfigurable but its table entry says it is not live";
+    EXPECT_TRUE(spec->live) << description->name << " is reconfigurable but its table row says it is not live";
+    const std::string expected_type = spec->type == st::ParameterType::kText ? "str" : st::toString(spec->type);
+    EXPECT_EQ(description->type, expected_type) << description->name;
+    EXPECT_EQ(cfg_default_values.at(description->name), spec->defaults.of(st::Preset::kDefault))
+        << description->name << ": the cfg default differs from the table's default preset";
+    EXPECT_EQ(cfg_default_values.at(description->name), spec->get(defaults)) << description->name;
+    // dynamic_reconfigure clamps to min/max silently: the cfg must not bound what the table checks.
+    if (spec->type == st::ParameterType::kDouble) {
+      EXPECT_EQ(std::get<double>(cfg_min_values.at(description->name)), -std::numeric_limits<double>::infinity())
+          << description->name;
+      EXPECT_EQ(std::get<double>(cfg_max_values.at(description->name)), std::numeric_limits<double>::infinity())
+          << description->name;
+    } else if (spec->type == st::ParameterType::kInt) {
+      EXPECT_EQ(std::get<int>(cfg_min_values.at(description->name)), std::numeric_limits<int>::min()) << description->name;
+      EXPECT_EQ(std::get<int>(cfg_max_values.at(description->name)), std::numeric_limits<int>::max()) << description->name;
+    }
   }
+  for (const st::ParameterSpec& spec : st::parameterTable()) {
+    EXPECT_EQ(in_cfg.count(spec.name) > 0, spec.live) << spec.name << (spec.live ? " is live but missing from the cfg"
+                                                                                    : " is in the cfg but not live");
+  }
+}
+
+TEST(Reconfigure, ValuesRoundTripAtFullPrecision) {
+  namespace st = sdf_tracker;
+  st::Settings settings = st::preset("default");
+  st::setParameter(&settings, "MaxWeight", 12345.678901234);
+  st::setParameter(&settings, "ConvergenceCondition", 1.234567891e-7);
+  st::Settings back = st::preset("default");
+  for (const auto& [name, value] : reconfigureValues(toReconfigureConfig(settings))) st::setParameter(&back, name, value);
+  EXPECT_EQ(back.pipeline.integrator.max_weight, 12345.678901234);
+  EXPECT_EQ(back.pipeline.tracker.convergence_threshold, 1.234567891e-7);
+}
+
+TEST(Frames, LeadingSlashesAreStripped) {
+  EXPECT_EQ(stripSlash("/openni_depth_optical_frame"), "openni_depth_optical_frame");
+  EXPECT_EQ(stripSlash("//map"), "map");
+  EXPECT_EQ(stripSlash("base_link"), "base_link");
+  EXPECT_EQ(stripSlash("/"), "");
 }
 
 }  // namespace

@@ -30,7 +30,7 @@ RunResult runPipeline(const TumSequence& sequence, const PipelineConfig& config)
   SdfPipeline pipeline(config);
   RunResult run;
   for (size_t i = 0; i < sequence.size(); ++i) {
-    const FrameReport report = pipeline.processFrame(sequence.depth(i), sequence.camera());
+    const FrameReport report = pipeline.processFrame(sequence.depth(i), sequence.camera(), sequence.timestamp(i));
     run.failed_frames += report.track.ok() ? 0 : 1;
     run.trajectory.push_back({sequence.timestamp(i), pipeline.pose()});
   }

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -36,6 +37,12 @@ struct PipelineConfig {
   /// After this many consecutive tracking failures the map is cleared and rebuilt from the next
   /// frame at the held pose; 0 never resets.
   int reset_after_failures = 0;
+  /// Start tracking from a constant-velocity prediction (the last motion, scaled to the time
+  /// since the last tracked frame, so dropped frames are bridged). When tracking from the
+  /// prediction fails, the frame is tracked again from the last pose. Off: from the last pose.
+  bool predict_motion = false;
+  /// No prediction across a gap longer than this [s]: the last motion says little by then.
+  double max_prediction_gap_s = 0.5;
 
   std::vector<std::string> validate() const;
 };
@@ -59,13 +66,17 @@ class SdfPipeline {
 
   const PipelineConfig& config() const { return config_; }
 
-  /// Tracks and fuses one depth image (metres). Bad input yields a report with kBadInput; the
-  /// map and pose are then untouched. The camera must match the image size.
-  FrameReport processFrame(const DepthImage& depth, const PinholeCamera& camera);
+  /// Tracks and fuses one depth image (metres) taken at `timestamp_s` (any clock; frames must come
+  /// in time order; NaN: evenly spaced frames). Bad input yields a report with kBadInput; the map
+  /// and pose are then untouched. The camera must match the image size.
+  FrameReport processFrame(const DepthImage& depth, const PinholeCamera& camera,
+                           double timestamp_s = std::numeric_limits<double>::quiet_NaN());
 
   /// Camera to world at the last accepted frame.
   const Eigen::Isometry3d& pose() const { return T_W_C_; }
   const TsdfVolume& volume() const { return *volume_; }
+  /// Frames in a row that could not be tracked (0 while tracking works).
+  int consecutiveFailures() const { return consecutive_failures_; }
 
   /// Clears the map and puts the camera back at the start pose.
   void reset();
@@ -82,6 +93,9 @@ class SdfPipeline {
 
  private:
   DepthImage filterDepth(const DepthImage& depth) const;
+  /// Where the camera should be at `timestamp_s` if it kept its last motion; the last pose when
+  /// prediction is off or there is no motion to go by.
+  Eigen::Isometry3d predictPose(double timestamp_s) const;
 
   PipelineConfig config_;
   std::unique_ptr<TsdfVolume> volume_;
@@ -91,6 +105,11 @@ class SdfPipeline {
   Eigen::Isometry3d T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   bool map_initialised_ = false;
   int consecutive_failures_ = 0;
+  /// The last two tracked poses and their times, for the motion model.
+  Eigen::Isometry3d T_W_C_previous_ = Eigen::Isometry3d::Identity();
+  double time_previous_s_ = std::numeric_limits<double>::quiet_NaN();
+  double time_last_s_ = std::numeric_limits<double>::quiet_NaN();
+  int tracked_since_start_ = 0;
 };
 
 }  // namespace sdf_tracker

@@ -92,6 +92,11 @@ class TsdfVolume {
   /// Sets every voxel back to (Dmax, 0): nothing observed.
   void clear();
 
+  /// Copies the z-slabs [k_begin, k_end) of `source`, which must have this volume's config
+  /// (std::invalid_argument otherwise). Lets a reader take a snapshot of a live map in short
+  /// pieces, holding the writer's lock only for one piece at a time.
+  void copySlabsFrom(const TsdfVolume& source, int k_begin, int k_end);
+
   size_t index(int i, int j, int k) const {
     return (static_cast<size_t>(k) * config_.dims.y() + j) * config_.dims.x() + i;
   }

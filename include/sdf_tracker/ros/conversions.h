@@ -27,8 +27,9 @@ sdf_tracker::PinholeCamera toCamera(const sensor_msgs::CameraInfo& info);
 
 geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T);
 
-/// A triangle-list marker of the mesh (world frame).
-visualization_msgs::Marker toMarker(const sdf_tracker::TriangleMesh& mesh, const std_msgs::Header& header);
+/// A triangle-list marker of the mesh; `T_frame_W` places the tracker's world in header.frame_id.
+visualization_msgs::Marker toMarker(const sdf_tracker::TriangleMesh& mesh, const std_msgs::Header& header,
+                                    const Eigen::Isometry3d& T_frame_W = Eigen::Isometry3d::Identity());
 
 }  // namespace sdf_tracker_ros
 
@@ -37,5 +38,7 @@ visualization_msgs::Marker toMarker(const sdf_tracker::TriangleMesh& mesh, const
 namespace sdf_tracker_ros {
 /// Surface points with normals as PointCloud2 (x y z normal_x normal_y normal_z), built with PCL.
 /// Implemented in its own translation unit so that only one file compiles PCL.
-sensor_msgs::PointCloud2 toCloudMsg(const sdf_tracker::SurfaceCloud& cloud, const std_msgs::Header& header);
+/// `T_frame_W` places the tracker's world in header.frame_id (points and normals are transformed).
+sensor_msgs::PointCloud2 toCloudMsg(const sdf_tracker::SurfaceCloud& cloud, const std_msgs::Header& header,
+                                    const Eigen::Isometry3d& T_frame_W = Eigen::Isometry3d::Identity());
 }  // namespace sdf_tracker_ros

@@ -1,0 +1,60 @@
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include <Eigen/Geometry>
+#include <ros/ros.h>
+
+#include "sdf_tracker/core/tsdf_volume.h"
+
+namespace sdf_tracker_ros {
+
+/// A copy of the live map, taken in short pieces so that the tracker is never held up for long.
+class MapSnapshot {
+ public:
+  /// `live` is read only while `map_mutex` is held; `live()` may return nullptr (no map yet).
+  MapSnapshot(std::mutex& map_mutex, std::function<const sdf_tracker::TsdfVolume*()> live);
+
+  /// Brings the copy up to date: slab groups of `slabs_per_lock` z-slices each under the lock.
+  /// Slab groups may come from consecutive frames (as a screen refresh would); each voxel is
+  /// consistent. Returns the copy, or nullptr when there is no map.
+  const sdf_tracker::TsdfVolume* update(int slabs_per_lock = 8);
+
+ private:
+  std::mutex& map_mutex_;
+  std::function<const sdf_tracker::TsdfVolume*()> live_;
+  std::unique_ptr<sdf_tracker::TsdfVolume> copy_;
+};
+
+/// Publishes the map as ~cloud and ~mesh from a snapshot on its own low-priority thread, each at
+/// its rate and only while someone subscribes: map extraction never blocks tracking and takes
+/// only what CPU the tracker leaves.
+class MapPublisher {
+ public:
+  /// `T_map_W` gives the map frame's pose in the tracker's world, `stamp` the latest frame's stamp.
+  MapPublisher(ros::NodeHandle pnh, std::mutex& map_mutex, std::function<const sdf_tracker::TsdfVolume*()> live,
+               std::function<Eigen::Isometry3d()> T_map_W, std::function<ros::Time()> stamp, std::string map_frame,
+               double cloud_rate_hz, double mesh_rate_hz);
+  ~MapPublisher();
+
+ private:
+  void run();
+
+  ros::Publisher cloud_pub_, mesh_pub_;
+  MapSnapshot snapshot_;
+  std::function<Eigen::Isometry3d()> T_map_W_;
+  std::function<ros::Time()> stamp_;
+  std::string map_frame_;
+  double cloud_period_s_, mesh_period_s_;  ///< 0: never
+  std::mutex wake_mutex_;
+  std::condition_variable wake_;
+  bool stopping_ = false;
+  std::thread thread_;
+};
+
+}  // namespace sdf_tracker_ros

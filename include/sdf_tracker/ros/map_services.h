@@ -1,0 +1,41 @@
+#pragma once
+
+#include <string>
+
+#include <ros/ros.h>
+#include <std_srvs/Empty.h>
+
+#include "sdf_tracker/SavePath.h"
+#include "sdf_tracker/ros/parameters.h"
+#include "sdf_tracker/ros/tracker_state.h"
+
+namespace sdf_tracker_ros {
+
+/// The node's services (~reset, ~save_mesh, ~save_volume, ~load_volume) and its files written at
+/// shut-down (trajectory, mesh, cloud, OutputTriangles, OutputVolume). Saving copies the map under
+/// the lock and extracts from the copy, so tracking waits only for the copy.
+class MapServices {
+ public:
+  MapServices(ros::NodeHandle pnh, TrackerState& state, const NodeOptions& options);
+
+  /// Writes every file the options ask for; logs (never throws) what fails.
+  void writeAtShutdown();
+
+ private:
+  bool reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&);
+  bool saveMesh(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res);
+  bool saveVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res);
+  bool loadVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res);
+  /// Runs a service's action; its text (or the exception's) becomes the response's message.
+  static bool answer(sdf_tracker::SavePath::Response& res, const std::function<std::string()>& action);
+  /// A copy of the map and the trajectory so far, taken under the lock.
+  sdf_tracker::TsdfVolume copyMap(std::vector<sdf_tracker::io::StampedPose>* trajectory);
+  void writeTrajectory(const std::vector<sdf_tracker::io::StampedPose>& trajectory) const;
+  std::string outputPath(const std::string& requested, const std::string& default_name) const;
+
+  TrackerState& state_;
+  NodeOptions options_;
+  ros::ServiceServer reset_srv_, save_mesh_srv_, save_volume_srv_, load_volume_srv_;
+};
+
+}  // namespace sdf_tracker_ros

@@ -1,0 +1,59 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <ros/ros.h>
+
+#include "sdf_tracker/SdfTrackerConfig.h"
+#include "sdf_tracker/core/parameters.h"
+
+/// All of the node's ROS parameter and dynamic_reconfigure code: the tracker's settings come
+/// through the core's parameter table, the node's own options are read here.
+namespace sdf_tracker_ros {
+
+/// Frame names per REP 105, without leading slashes.
+struct FrameOptions {
+  std::string map_frame = "map";
+  std::string odom_frame;    ///< optional: map -> odom (identity) -> base
+  std::string base_frame;    ///< optional: the body the tracker moves; base -> camera comes from tf
+  std::string camera_frame;  ///< empty: the depth image's frame_id
+};
+
+/// The node's own options (ROS plumbing).
+struct NodeOptions {
+  std::string preset = "default";
+  std::string camera_name = "camera";  ///< c_name
+  bool depth_registered = false;
+  FrameOptions frames;
+  std::string imu_topic;  ///< optional: level the map frame with gravity from this IMU
+  double cloud_rate_hz = 1.0;
+  double mesh_rate_hz = 0.2;
+  int path_length = 10000;  ///< poses kept in ~path; older ones stay in the trajectory file
+  std::string trajectory_file;
+  std::string mesh_file;   ///< PLY mesh written at shut-down
+  std::string cloud_file;  ///< PLY surface cloud written at shut-down
+  std::string load_volume = "none";  ///< LoadVolume
+  bool output_triangles = false;     ///< OutputTriangles: triangles.obj at shut-down
+  bool output_volume = false;        ///< OutputVolume: sdf_volume.vti at shut-down
+  std::string output_directory = ".";
+  /// Intrinsics given explicitly (FocalLengthX/Y, CenterPointX/Y): used instead of camera_info.
+  bool intrinsics_from_parameters = false;
+};
+
+/// Strips leading slashes ("/openni_depth_optical_frame" -> "openni_depth_optical_frame"), as tf2
+/// does; the TUM bags of 2011 carry them.
+std::string stripSlash(const std::string& frame_id);
+
+/// Reads every private parameter of `pnh` once. Throws std::invalid_argument listing every
+/// invalid, mistyped or out-of-range value by its parameter name ("~CellSize must be in ...");
+/// nothing is clamped or replaced by a default. `unknown` receives names nobody reads.
+void readParameters(const ros::NodeHandle& pnh, sdf_tracker::Settings* settings, NodeOptions* options,
+                    std::vector<std::string>* unknown);
+
+/// dynamic_reconfigure <-> the parameter table, typed (no rounding through text).
+std::vector<std::pair<std::string, sdf_tracker::ParameterValue>> reconfigureValues(
+    const sdf_tracker::SdfTrackerConfig& config);
+sdf_tracker::SdfTrackerConfig toReconfigureConfig(const sdf_tracker::Settings& settings);
+
+}  // namespace sdf_tracker_ros

@@ -1,0 +1,79 @@
+#pragma once
+
+#include <deque>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+
+#include <Eigen/Geometry>
+#include <geometry_msgs/PoseStamped.h>
+#include <nav_msgs/Path.h>
+#include <ros/ros.h>
+#include <sensor_msgs/Imu.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <tf2_ros/transform_listener.h>
+
+#include "sdf_tracker/ros/parameters.h"
+
+namespace sdf_tracker_ros {
+
+/// The rotation from the tracker's world (the first camera's optical frame: x right, y down,
+/// z forward) to the REP 103 map frame (x forward, y left, z up) at the same origin.
+Eigen::Isometry3d mapFromOpticalWorld();
+
+/// A map frame whose z axis points against gravity: `up_W` is the measured up direction (the
+/// accelerometer's mean reading) in the tracker's world; x stays as close to the first camera's
+/// viewing direction as levelling allows. Throws std::invalid_argument for a zero vector.
+Eigen::Isometry3d gravityAlignedMapFromOpticalWorld(const Eigen::Vector3d& up_W);
+
+/// Puts the tracker's estimate on the tf tree the user already has (REP 105): publishes
+/// map -> [odom ->] base, where base is ~base_frame (its mounting base -> camera looked up in tf)
+/// or else the camera frame itself, so that map -> camera is the estimate. It never gives a frame a
+/// second parent: when the frame it would publish already has another parent, it says once which
+/// frame, which parent and which parameter to set, and publishes no tf (pose and path go on).
+/// Also publishes ~pose and a bounded ~path. Called from the frame thread only.
+class PoseBroadcaster {
+ public:
+  PoseBroadcaster(ros::NodeHandle nh, ros::NodeHandle pnh, const NodeOptions& options);
+
+  /// The estimate T_W_C (tracker world <- camera optical frame) for an image of `image_frame`
+  /// (its frame_id) at `stamp`. Returns the camera's pose in the map frame.
+  Eigen::Isometry3d publish(const ros::Time& stamp, const std::string& image_frame, const Eigen::Isometry3d& T_W_C);
+
+  /// The map frame's pose in the tracker's world, for map products (cloud, mesh).
+  Eigen::Isometry3d T_map_W() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return T_map_W_;
+  }
+  const std::string& mapFrame() const { return frames_.map_frame; }
+  /// Forgets the path (after ~reset or a loaded map).
+  void clearPath();
+
+ private:
+  /// The parent this node would give `child`; empty when publishing is safe or already refused.
+  bool mayPublishParentOf(const std::string& child, const std::string& parent);
+  void onImu(const sensor_msgs::ImuConstPtr& imu);
+
+  FrameOptions frames_;
+  int path_length_;
+  mutable std::mutex mutex_;  ///< guards T_map_W_, map_frame_fixed_ and the IMU samples
+  Eigen::Isometry3d T_map_W_;
+  bool map_frame_fixed_ = false;  ///< set at the first frame (after levelling, when an IMU is given)
+  std::set<std::string> refused_children_;
+
+  tf2_ros::Buffer tf_buffer_;
+  tf2_ros::TransformListener tf_listener_;
+  tf2_ros::TransformBroadcaster tf_broadcaster_;
+  ros::Publisher pose_pub_, path_pub_;
+  nav_msgs::Path path_;
+  std::deque<geometry_msgs::PoseStamped> path_poses_;
+
+  ros::Subscriber imu_sub_;
+  Eigen::Vector3d accel_sum_ = Eigen::Vector3d::Zero();  ///< in the IMU's frame
+  int accel_count_ = 0;
+  std::string imu_frame_;
+};
+
+}  // namespace sdf_tracker_ros

@@ -1,0 +1,108 @@
+#include "sdf_tracker/ros/map_publisher.h"
+
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <visualization_msgs/Marker.h>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "sdf_tracker/core/surface.h"
+#include "sdf_tracker/ros/conversions.h"
+
+namespace sdf_tracker_ros {
+
+namespace st = sdf_tracker;
+
+namespace {
+
+/// Niceness of the extraction thread: it runs on what the tracker leaves of the CPU.
+constexpr int kBackgroundNice = 10;
+
+bool sameGrid(const st::TsdfVolume& a, const st::TsdfVolume& b) {
+  const st::VolumeConfig &x = a.config(), &y = b.config();
+  return x.dims == y.dims && x.voxel_size_m == y.voxel_size_m && x.origin_W == y.origin_W &&
+         x.positive_truncation_m == y.positive_truncation_m && x.compact_voxels == y.compact_voxels;
+}
+
+}  // namespace
+
+MapSnapshot::MapSnapshot(std::mutex& map_mutex, std::function<const st::TsdfVolume*()> live)
+    : map_mutex_(map_mutex), live_(std::move(live)) {}
+
+const st::TsdfVolume* MapSnapshot::update(int slabs_per_lock) {
+  for (int k = 0;; k += slabs_per_lock) {
+    std::lock_guard<std::mutex> lock(map_mutex_);
+    const st::TsdfVolume* live = live_();
+    if (!live) return nullptr;
+    if (!copy_ || !sameGrid(*copy_, *live)) {  // first use, or a map of another grid was loaded
+      copy_ = std::make_unique<st::TsdfVolume>(*live);
+      return copy_.get();
+    }
+    if (k >= live->dims().z()) return copy_.get();
+    copy_->copySlabsFrom(*live, k, k + slabs_per_lock);
+  }
+}
+
+MapPublisher::MapPublisher(ros::NodeHandle pnh, std::mutex& map_mutex,
+                           std::function<const st::TsdfVolume*()> live, std::function<Eigen::Isometry3d()> T_map_W,
+                           std::function<ros::Time()> stamp, std::string map_frame, double cloud_rate_hz,
+                           double mesh_rate_hz)
+    : snapshot_(map_mutex, std::move(live)),
+      T_map_W_(std::move(T_map_W)),
+      stamp_(std::move(stamp)),
+      map_frame_(std::move(map_frame)),
+      cloud_period_s_(cloud_rate_hz > 0.0 ? 1.0 / cloud_rate_hz : 0.0),
+      mesh_period_s_(mesh_rate_hz > 0.0 ? 1.0 / mesh_rate_hz : 0.0) {
+  cloud_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("cloud", 1, true);
+  mesh_pub_ = pnh.advertise<visualization_msgs::Marker>("mesh", 1, true);
+  if (cloud_period_s_ > 0.0 || mesh_period_s_ > 0.0) thread_ = std::thread(&MapPublisher::run, this);
+}
+
+MapPublisher::~MapPublisher() {
+  {
+    std::lock_guard<std::mutex> lock(wake_mutex_);
+    stopping_ = true;
+  }
+  wake_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+void MapPublisher::run() {
+  ::setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), kBackgroundNice);
+#ifdef _OPENMP
+  omp_set_num_threads(1);  // this thread's own setting: extraction must not compete for both cores
+#endif
+  using Clock = std::chrono::steady_clock;
+  auto periodOf = [](double s) { return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s)); };
+  Clock::time_point next_cloud = Clock::now() + periodOf(cloud_period_s_);
+  Clock::time_point next_mesh = Clock::now() + periodOf(mesh_period_s_);
+  const Clock::time_point never = Clock::time_point::max();
+  if (cloud_period_s_ <= 0.0) next_cloud = never;
+  if (mesh_period_s_ <= 0.0) next_mesh = never;
+  while (true) {
+    {
+      std::unique_lock<std::mutex> lock(wake_mutex_);
+      if (wake_.wait_until(lock, std::min(next_cloud, next_mesh), [this] { return stopping_; })) return;
+    }
+    const Clock::time_point now = Clock::now();
+    const bool cloud_due = now >= next_cloud && cloud_pub_.getNumSubscribers() > 0;
+    const bool mesh_due = now >= next_mesh && mesh_pub_.getNumSubscribers() > 0;
+    if (now >= next_cloud) next_cloud = now + periodOf(cloud_period_s_);
+    if (now >= next_mesh) next_mesh = now + periodOf(mesh_period_s_);
+    if (!cloud_due && !mesh_due) continue;
+    const st::TsdfVolume* map = snapshot_.update();
+    if (!map) continue;
+    std_msgs::Header header;
+    header.stamp = stamp_();
+    header.frame_id = map_frame_;
+    const Eigen::Isometry3d T_map_W = T_map_W_();
+    if (cloud_due) cloud_pub_.publish(toCloudMsg(st::extractSurfaceCloud(*map), header, T_map_W));
+    if (mesh_due) mesh_pub_.publish(toMarker(st::extractMesh(*map), header, T_map_W));
+  }
+}
+
+}  // namespace sdf_tracker_ros

@@ -1,0 +1,113 @@
+#include "sdf_tracker/ros/map_services.h"
+
+#include "sdf_tracker/core/surface.h"
+
+namespace sdf_tracker_ros {
+
+namespace st = sdf_tracker;
+
+MapServices::MapServices(ros::NodeHandle pnh, TrackerState& state, const NodeOptions& options)
+    : state_(state), options_(options) {
+  reset_srv_ = pnh.advertiseService("reset", &MapServices::reset, this);
+  save_mesh_srv_ = pnh.advertiseService("save_mesh", &MapServices::saveMesh, this);
+  save_volume_srv_ = pnh.advertiseService("save_volume", &MapServices::saveVolume, this);
+  load_volume_srv_ = pnh.advertiseService("load_volume", &MapServices::loadVolume, this);
+}
+
+std::string MapServices::outputPath(const std::string& requested, const std::string& default_name) const {
+  return requested.empty() ? options_.output_directory + "/" + default_name : requested;
+}
+
+st::TsdfVolume MapServices::copyMap(std::vector<st::io::StampedPose>* trajectory) {
+  std::lock_guard<std::mutex> lock(state_.mutex);
+  if (trajectory) *trajectory = state_.trajectory;
+  return state_.pipeline->volume();
+}
+
+void MapServices::writeTrajectory(const std::vector<st::io::StampedPose>& trajectory) const {
+  if (options_.trajectory_file.empty()) return;
+  st::io::writeTrajectory(options_.trajectory_file, trajectory);
+  ROS_INFO("sdf_tracker: wrote %zu poses to %s", trajectory.size(), options_.trajectory_file.c_str());
+}
+
+void MapServices::writeAtShutdown() {
+  std::vector<st::io::StampedPose> trajectory;
+  const st::TsdfVolume map = copyMap(&trajectory);
+  auto attempt = [](const char* what, const std::function<void()>& write) {
+    try {
+      write();
+    } catch (const std::exception& e) {
+      ROS_ERROR("sdf_tracker: at shut-down, writing the %s failed: %s", what, e.what());
+    }
+  };
+  attempt("trajectory", [&] { writeTrajectory(trajectory); });
+  const bool need_mesh = !options_.mesh_file.empty() || options_.output_triangles;
+  const st::TriangleMesh mesh = need_mesh ? st::extractMesh(map) : st::TriangleMesh();
+  if (!options_.mesh_file.empty()) attempt("mesh", [&] { st::io::writePly(options_.mesh_file, mesh); });
+  if (!options_.cloud_file.empty()) {
+    attempt("cloud", [&] { st::io::writePly(options_.cloud_file, st::extractSurfaceCloud(map)); });
+  }
+  if (options_.output_triangles) attempt("triangles", [&] { st::io::writeObj(outputPath("", "triangles.obj"), mesh); });
+  if (options_.output_volume) attempt("volume", [&] { st::io::writeVti(outputPath("", "sdf_volume.vti"), map); });
+}
+
+bool MapServices::answer(sdf_tracker::SavePath::Response& res, const std::function<std::string()>& action) {
+  try {
+    res.message = action();
+    res.success = true;
+  } catch (const std::exception& e) {
+    res.success = false;
+    res.message = e.what();
+  }
+  return true;  // the call itself succeeded; the response says whether the action did
+}
+
+bool MapServices::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+  std::lock_guard<std::mutex> lock(state_.mutex);
+  state_.pipeline->reset();
+  state_.trajectory.clear();
+  state_.restarted = true;
+  ROS_INFO("sdf_tracker: map and pose reset");
+  return true;
+}
+
+bool MapServices::saveMesh(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res) {
+  return answer(res, [&] {
+    const std::string path = outputPath(req.path, "mesh.ply");
+    std::vector<st::io::StampedPose> trajectory;
+    const st::TriangleMesh mesh = st::extractMesh(copyMap(&trajectory));
+    const bool obj = path.size() > 4 && path.compare(path.size() - 4, 4, ".obj") == 0;
+    obj ? st::io::writeObj(path, mesh) : st::io::writePly(path, mesh);
+    writeTrajectory(trajectory);
+    return "wrote " + std::to_string(mesh.triangles.size()) + " triangles to " + path;
+  });
+}
+
+bool MapServices::saveVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res) {
+  return answer(res, [&] {
+    const std::string path = outputPath(req.path, "sdf_volume.vti");
+    std::vector<st::io::StampedPose> trajectory;
+    st::io::writeVti(path, copyMap(&trajectory));
+    writeTrajectory(trajectory);
+    return "wrote the volume to " + path;
+  });
+}
+
+bool MapServices::loadVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res) {
+  return answer(res, [&] {
+    const std::string path = outputPath(req.path, "sdf_volume.vti");
+    bool compact;
+    {
+      std::lock_guard<std::mutex> lock(state_.mutex);
+      compact = state_.pipeline->config().volume.compact_voxels;
+    }
+    st::TsdfVolume loaded = st::io::readVti(path, compact);  // read before taking the lock
+    std::lock_guard<std::mutex> lock(state_.mutex);
+    state_.pipeline->setVolume(std::move(loaded));
+    state_.trajectory.clear();
+    state_.restarted = true;
+    return "tracking against " + path;
+  });
+}
+
+}  // namespace sdf_tracker_ros

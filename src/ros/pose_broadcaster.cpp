@@ -1,0 +1,164 @@
+#include "sdf_tracker/ros/pose_broadcaster.h"
+
+#include <stdexcept>
+
+#include <tf2_eigen/tf2_eigen.h>
+
+#include "sdf_tracker/ros/conversions.h"
+
+namespace sdf_tracker_ros {
+
+namespace {
+constexpr double kThrottle_s = 5.0;
+}  // namespace
+
+Eigen::Isometry3d mapFromOpticalWorld() {
+  Eigen::Matrix3d R;  // rows: map x = optical z, map y = -optical x, map z = -optical y
+  R << 0, 0, 1,  //
+      -1, 0, 0,  //
+      0, -1, 0;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = R;
+  return T;
+}
+
+Eigen::Isometry3d gravityAlignedMapFromOpticalWorld(const Eigen::Vector3d& up_W) {
+  if (!(up_W.norm() > 0.0) || !up_W.allFinite()) {
+    throw std::invalid_argument("gravity: the up direction is zero or not finite");
+  }
+  const Eigen::Vector3d z = up_W.normalized();
+  // Forward: the first camera's viewing direction (optical z) with its vertical part removed;
+  // if the camera looked straight up or down, its image "up" (-optical y) instead.
+  Eigen::Vector3d forward = Eigen::Vector3d::UnitZ() - z * z.z();
+  if (forward.norm() < 1e-3) forward = -Eigen::Vector3d::UnitY() - z * -z.y();
+  const Eigen::Vector3d x = forward.normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear().row(0) = x.transpose();
+  T.linear().row(1) = y.transpose();
+  T.linear().row(2) = z.transpose();
+  return T;
+}
+
+PoseBroadcaster::PoseBroadcaster(ros::NodeHandle nh, ros::NodeHandle pnh, const NodeOptions& options)
+    : frames_(options.frames),
+      path_length_(options.path_length),
+      T_map_W_(mapFromOpticalWorld()),
+      tf_listener_(tf_buffer_, nh) {
+  pose_pub_ = pnh.advertise<geometry_msgs::PoseStamped>("pose", 10);
+  path_pub_ = pnh.advertise<nav_msgs::Path>("path", 1, true);
+  path_.header.frame_id = frames_.map_frame;
+  if (!options.imu_topic.empty()) {
+    imu_sub_ = nh.subscribe(options.imu_topic, 200, &PoseBroadcaster::onImu, this);
+    ROS_INFO("sdf_tracker: levelling the map frame with gravity from %s", imu_sub_.getTopic().c_str());
+  }
+}
+
+void PoseBroadcaster::onImu(const sensor_msgs::ImuConstPtr& imu) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (map_frame_fixed_) return;
+  const auto& a = imu->linear_acceleration;
+  const Eigen::Vector3d accel(a.x, a.y, a.z);
+  if (!accel.allFinite()) return;
+  accel_sum_ += accel;
+  ++accel_count_;
+  imu_frame_ = stripSlash(imu->header.frame_id);
+}
+
+void PoseBroadcaster::clearPath() {
+  path_poses_.clear();
+  path_.poses.clear();
+}
+
+bool PoseBroadcaster::mayPublishParentOf(const std::string& child, const std::string& parent) {
+  if (refused_children_.count(child)) return false;
+  std::string existing;
+  if (tf_buffer_._getParent(child, ros::Time(0), existing) && stripSlash(existing) != parent) {
+    refused_children_.insert(child);
+    ROS_ERROR("sdf_tracker: frame '%s' already has the parent '%s' from another publisher, so this node will not "
+              "publish %s -> %s (a frame must have one parent). Set ~base_frame to the frame this tracker moves "
+              "(e.g. the root of the camera's own chain, such as a robot's base_link or the camera's mount frame): "
+              "the node then publishes %s -> <base_frame> and looks up <base_frame> -> %s in tf. Until then the "
+              "estimate is on ~pose and ~path only.",
+              child.c_str(), stripSlash(existing).c_str(), parent.c_str(), child.c_str(), parent.c_str(),
+              child.c_str());
+    return false;
+  }
+  return true;
+}
+
+Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::string& image_frame,
+                                           const Eigen::Isometry3d& T_W_C) {
+  const std::string camera_frame = frames_.camera_frame.empty() ? stripSlash(image_frame) : frames_.camera_frame;
+  std::unique_lock<std::mutex> lock(mutex_);
+  if (!map_frame_fixed_) {
+    if (imu_sub_ && accel_count_ == 0) {
+      ROS_WARN("sdf_tracker: no message on %s before the first frame: the map frame is not levelled",
+               imu_sub_.getTopic().c_str());
+    } else if (imu_sub_) {
+      try {
+        const Eigen::Isometry3d T_C_I =
+            tf2::transformToEigen(tf_buffer_.lookupTransform(camera_frame, imu_frame_, ros::Time(0)));
+        // At the first frame the tracker's world is the camera's optical frame (T_W_C = I).
+        const Eigen::Vector3d up_W = T_W_C.linear() * T_C_I.linear() * (accel_sum_ / accel_count_);
+        T_map_W_ = gravityAlignedMapFromOpticalWorld(up_W);
+        ROS_INFO("sdf_tracker: map frame levelled with %d IMU samples", accel_count_);
+      } catch (const std::exception& e) {
+        ROS_WARN("sdf_tracker: cannot level the map frame: no tf from the IMU's frame '%s' to the camera frame "
+                 "'%s' (%s); the map frame is the first camera pose in REP 103 axes",
+                 imu_frame_.c_str(), camera_frame.c_str(), e.what());
+      }
+    }
+    map_frame_fixed_ = true;
+  }
+  const Eigen::Isometry3d T_map_C = T_map_W_ * T_W_C;
+  lock.unlock();
+
+  geometry_msgs::PoseStamped pose;
+  pose.header.stamp = stamp;
+  pose.header.frame_id = frames_.map_frame;
+  pose.pose = toPoseMsg(T_map_C);
+  pose_pub_.publish(pose);
+  path_poses_.push_back(pose);
+  while (static_cast<int>(path_poses_.size()) > path_length_) path_poses_.pop_front();
+  if (path_pub_.getNumSubscribers() > 0) {
+    path_.header.stamp = stamp;
+    path_.poses.assign(path_poses_.begin(), path_poses_.end());
+    path_pub_.publish(path_);
+  }
+
+  // map -> [odom ->] base, such that map -> camera is the estimate.
+  Eigen::Isometry3d T_map_base = T_map_C;
+  std::string base = camera_frame;
+  if (!frames_.base_frame.empty() && frames_.base_frame != camera_frame) {
+    base = frames_.base_frame;
+    try {
+      const Eigen::Isometry3d T_base_C =
+          tf2::transformToEigen(tf_buffer_.lookupTransform(base, camera_frame, ros::Time(0)));
+      T_map_base = T_map_C * T_base_C.inverse();
+    } catch (const tf2::TransformException& e) {
+      ROS_WARN_THROTTLE(kThrottle_s, "sdf_tracker: waiting for tf %s -> %s (the camera's mounting on ~base_frame): %s",
+                        base.c_str(), camera_frame.c_str(), e.what());
+      return T_map_C;
+    }
+  }
+  std::vector<geometry_msgs::TransformStamped> transforms;
+  std::string parent = frames_.map_frame;
+  if (!frames_.odom_frame.empty()) {
+    if (!mayPublishParentOf(frames_.odom_frame, parent)) return T_map_C;
+    // map -> odom stays the identity: this tracker corrects no drift after the fact.
+    transforms.push_back(tf2::eigenToTransform(Eigen::Isometry3d::Identity()));
+    transforms.back().header.frame_id = parent;
+    transforms.back().child_frame_id = frames_.odom_frame;
+    parent = frames_.odom_frame;
+  }
+  if (!mayPublishParentOf(base, parent)) return T_map_C;
+  transforms.push_back(tf2::eigenToTransform(T_map_base));
+  transforms.back().header.frame_id = parent;
+  transforms.back().child_frame_id = base;
+  for (auto& tf : transforms) tf.header.stamp = stamp;
+  tf_broadcaster_.sendTransform(transforms);
+  return T_map_C;
+}
+
+}  // namespace sdf_tracker_ros
