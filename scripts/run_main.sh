@@ -39,7 +39,7 @@ roslaunch sdf_tracker tum_bag.launch bag:="$bag" rate:="$rate" rviz:=false requi
 frames=$(grep -cvE '^\s*(#|$)' "$sequence/depth.txt")
 tracked=$(grep -cvE '^\s*(#|$)' "$output/trajectory.txt")
 echo "the node processed $tracked of $frames frames ($((frames - tracked)) dropped)"
-grep -aoE "[0-9.]+ ms per frame on average \([0-9.]+ frames/s\)" "$output/roslaunch.log" | tail -n 1 \
+grep -aoE "per frame in the node: median [0-9.]+ ms, mean [0-9.]+ ms" "$output/roslaunch.log" | tail -n 1 \
   | sed 's/^/speed: /' || true
 rm -f "$bag"  # large and reproducible
 

@@ -29,16 +29,14 @@ sdf_tracker::DepthImage toDepthImage(const sensor_msgs::Image& msg) {
   sdf_tracker::DepthImage depth(static_cast<int>(msg.width), static_cast<int>(msg.height));
   for (uint32_t v = 0; v < msg.height; ++v) {
     const uint8_t* row = msg.data.data() + static_cast<size_t>(v) * msg.step;
+    if (metres) {  // already float metres: one copy per row
+      std::memcpy(&depth.at(0, static_cast<int>(v)), row, static_cast<size_t>(msg.width) * 4);
+      continue;
+    }
     for (uint32_t u = 0; u < msg.width; ++u) {
-      float z;
-      if (millimetres) {
-        uint16_t raw;
-        std::memcpy(&raw, row + u * 2, 2);
-        z = raw == 0 ? 0.0f : raw * 0.001f;
-      } else {
-        std::memcpy(&z, row + u * 4, 4);
-      }
-      depth.at(static_cast<int>(u), static_cast<int>(v)) = z;
+      uint16_t raw;
+      std::memcpy(&raw, row + u * 2, 2);
+      depth.at(static_cast<int>(u), static_cast<int>(v)) = raw == 0 ? 0.0f : raw * 0.001f;
     }
   }
   return depth;

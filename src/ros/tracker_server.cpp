@@ -1,8 +1,12 @@
 #include "sdf_tracker/ros/tracker_server.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <numeric>
 
 #include <image_transport/camera_common.h>
+#include <topic_tools/shape_shifter.h>
 
 #include "sdf_tracker/TrackingStatus.h"
 #include "sdf_tracker/core/raycaster.h"
@@ -76,13 +80,19 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
     depth_topic_ = depth_sub_.getTopic();
   }
   info_topic_ = image_transport::getCameraInfoTopic(depth_topic_);
+  if (!options_.intrinsics_from_parameters) {
+    image_watch_sub_ = nh_.subscribe<topic_tools::ShapeShifter>(
+        depth_topic_, 1, [this](const topic_tools::ShapeShifter::ConstPtr&) {
+          std::lock_guard<std::mutex> lock(mailbox_mutex_);
+          last_image_wall_ = ros::WallTime::now();
+        });
+  }
   info_watch_sub_ = nh_.subscribe<sensor_msgs::CameraInfo>(
       info_topic_, 1, [this](const sensor_msgs::CameraInfoConstPtr& info) {
         std::lock_guard<std::mutex> lock(mailbox_mutex_);
         last_info_wall_ = ros::WallTime::now();
         last_info_ = info;
       });
-  last_frame_wall_ = ros::WallTime::now();
   watchdog_timer_ = nh_.createTimer(ros::Duration(2.0), &TrackerServer::checkInputs, this);
 
   const auto& v = settings.pipeline.volume;
@@ -102,15 +112,19 @@ TrackerServer::~TrackerServer() {
   mailbox_changed_.notify_all();
   if (frame_thread_.joinable()) frame_thread_.join();
   map_publisher_.reset();
-  ROS_INFO("sdf_tracker: %u frames received, %u processed, %u dropped", frames_received_, frames_processed_,
-           frames_dropped_);
+  std::vector<double> ms = frame_ms_;
+  std::sort(ms.begin(), ms.end());
+  // Also on stdout: rosconsole may be gone by the time roslaunch stops the node.
+  std::printf("sdf_tracker: %u frames received, %zu processed, %u dropped; per frame in the node: median %.1f ms, "
+              "mean %.1f ms\n",
+              frames_received_, ms.size(), frames_dropped_, ms.empty() ? 0.0 : ms[ms.size() / 2],
+              ms.empty() ? 0.0 : std::accumulate(ms.begin(), ms.end(), 0.0) / ms.size());
   services_->writeAtShutdown();
 }
 
 void TrackerServer::onFrame(const sensor_msgs::ImageConstPtr& image, const sensor_msgs::CameraInfoConstPtr& info) {
   {
     std::lock_guard<std::mutex> lock(mailbox_mutex_);
-    last_frame_wall_ = ros::WallTime::now();
     ++frames_received_;
     if (pending_) ++frames_dropped_;  // the frame thread was still busy: only the newest is kept
     pending_ = Frame{image, info};
@@ -155,6 +169,7 @@ st::PinholeCamera TrackerServer::cameraFor(const Frame& frame) {
 }
 
 void TrackerServer::process(const Frame& frame) {
+  const auto started = std::chrono::steady_clock::now();
   const sensor_msgs::Image& image = *frame.image;
   sdf_tracker::TrackingStatus status;
   status.header = image.header;
@@ -207,11 +222,6 @@ void TrackerServer::process(const Frame& frame) {
     status.consecutive_failures = static_cast<uint32_t>(state_.pipeline->consecutiveFailures());
   }
 
-  ++frames_processed_;
-  sum_frame_ms_ += report.tracking_ms + report.fusion_ms;
-  ROS_INFO_THROTTLE(10.0, "sdf_tracker: %u frames processed, %u dropped, %.1f ms per frame on average (%.1f frames/s)",
-                    frames_processed_, status.frames_dropped, sum_frame_ms_ / frames_processed_,
-                    1000.0 * frames_processed_ / std::max(sum_frame_ms_, 1e-9));
   const st::TrackResult& t = report.track;
   const bool was_lost = lost_;
   lost_ = static_cast<int>(status.consecutive_failures) >= kLostAfterFailedFrames;
@@ -250,21 +260,31 @@ void TrackerServer::process(const Frame& frame) {
                                               state_.pipeline->config().raycast, &depth);
     denoised_pub_.publish(toImageMsg(cast.depth, image.header));
   }
+  // The whole cost of a frame in the node: conversion, tracking, fusion, publishing.
+  frame_ms_.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count());
+  ROS_INFO_THROTTLE(10.0, "sdf_tracker: %zu frames processed, %u dropped; %.1f ms per frame on average",
+                    frame_ms_.size(), status.frames_dropped,
+                    std::accumulate(frame_ms_.begin(), frame_ms_.end(), 0.0) / frame_ms_.size());
 }
 
 void TrackerServer::checkInputs(const ros::TimerEvent&) {
-  // Images without a matching camera_info never reach onFrame: say so instead of idling.
-  const ros::WallTime now = ros::WallTime::now();
+  // Images without a matching camera_info never reach onFrame: say which input is missing
+  // instead of idling. Once frames flow, the image watch is no longer needed.
   std::lock_guard<std::mutex> lock(mailbox_mutex_);
-  if (options_.intrinsics_from_parameters || (now - last_frame_wall_).toSec() < 3.0) return;
-  if (depth_sub_.getNumPublishers() == 0) return;
-  if (last_info_wall_.isZero() || (now - last_info_wall_).toSec() > 3.0) {
-    ROS_ERROR_THROTTLE(10.0, "sdf_tracker: %s has a publisher but no camera_info arrives on %s; frames cannot be "
-                       "used (publish camera_info, or set FocalLengthX/Y and CenterPointX/Y)",
+  if (frames_received_ > 0) {
+    image_watch_sub_.shutdown();
+    return;
+  }
+  const ros::WallTime now = ros::WallTime::now();
+  const bool images = !last_image_wall_.isZero() && (now - last_image_wall_).toSec() < 3.0;
+  const bool infos = !last_info_wall_.isZero() && (now - last_info_wall_).toSec() < 3.0;
+  if (images && !infos) {
+    ROS_ERROR_THROTTLE(10.0, "sdf_tracker: images arrive on %s but no camera_info on %s; frames cannot be used "
+                       "(publish camera_info, or set FocalLengthX/Y and CenterPointX/Y)",
                        depth_topic_.c_str(), info_topic_.c_str());
-  } else {
-    ROS_WARN_THROTTLE(10.0, "sdf_tracker: no frame for %.0f s although %s and %s have publishers: are their stamps "
-                      "equal?", (now - last_frame_wall_).toSec(), depth_topic_.c_str(), info_topic_.c_str());
+  } else if (images && infos) {
+    ROS_WARN_THROTTLE(10.0, "sdf_tracker: images on %s and camera_info on %s arrive but never with the same stamp; "
+                      "they are paired by exact stamp", depth_topic_.c_str(), info_topic_.c_str());
   }
 }
 

@@ -13,6 +13,7 @@
 #include "sdf_tracker/core/parameters.h"
 #include "sdf_tracker/ros/conversions.h"
 #include "sdf_tracker/ros/parameters.h"
+#include "sdf_tracker/ros/pose_broadcaster.h"
 
 namespace sdf_tracker_ros {
 namespace {
@@ -115,6 +116,32 @@ TEST(Reconfigure, ValuesRoundTripAtFullPrecision) {
   for (const auto& [name, value] : reconfigureValues(toReconfigureConfig(settings))) st::setParameter(&back, name, value);
   EXPECT_EQ(back.pipeline.integrator.max_weight, 12345.678901234);
   EXPECT_EQ(back.pipeline.tracker.convergence_threshold, 1.234567891e-7);
+}
+
+TEST(Frames, TheMapFrameHasRep103AxesAtTheFirstCameraPose) {
+  const Eigen::Isometry3d T_map_W = mapFromOpticalWorld();
+  // The camera looks along optical +z: that is map +x (forward); optical +x (right) is map -y;
+  // optical +y (down) is map -z.
+  EXPECT_TRUE((T_map_W.linear() * Eigen::Vector3d::UnitZ()).isApprox(Eigen::Vector3d::UnitX()));
+  EXPECT_TRUE((T_map_W.linear() * Eigen::Vector3d::UnitX()).isApprox(-Eigen::Vector3d::UnitY()));
+  EXPECT_TRUE((T_map_W.linear() * Eigen::Vector3d::UnitY()).isApprox(-Eigen::Vector3d::UnitZ()));
+  EXPECT_NEAR(T_map_W.linear().determinant(), 1.0, 1e-12);
+  // Gravity straight down the image (a level camera): the same frame.
+  EXPECT_TRUE(gravityAlignedMapFromOpticalWorld(-Eigen::Vector3d::UnitY()).isApprox(T_map_W));
+}
+
+TEST(Frames, GravityLevelsTheMapFrameAndKeepsTheViewingDirectionForward) {
+  // A camera pitched 30 degrees down: in its optical frame "up" leans towards -z.
+  const double pitch = 30.0 * M_PI / 180.0;
+  const Eigen::Vector3d up_W(0.0, -std::cos(pitch), -std::sin(pitch));
+  const Eigen::Isometry3d T_map_W = gravityAlignedMapFromOpticalWorld(up_W * 9.81);
+  EXPECT_TRUE((T_map_W.linear() * up_W).isApprox(Eigen::Vector3d::UnitZ())) << "map z is up";
+  const Eigen::Vector3d forward = T_map_W.linear() * Eigen::Vector3d::UnitZ();
+  EXPECT_NEAR(forward.y(), 0.0, 1e-12) << "no yaw";
+  EXPECT_GT(forward.x(), 0.0);
+  EXPECT_NEAR(std::atan2(-forward.z(), forward.x()), pitch, 1e-9) << "the camera looks 30 degrees down";
+  EXPECT_NEAR(T_map_W.linear().determinant(), 1.0, 1e-12);
+  EXPECT_THROW(gravityAlignedMapFromOpticalWorld(Eigen::Vector3d::Zero()), std::invalid_argument);
 }
 
 TEST(Frames, LeadingSlashesAreStripped) {

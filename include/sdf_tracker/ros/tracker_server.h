@@ -59,14 +59,16 @@ class TrackerServer {
   image_transport::ImageTransport it_;
   image_transport::CameraSubscriber depth_sub_;  ///< image + camera_info, synchronised
   image_transport::Subscriber depth_only_sub_;    ///< image alone, when intrinsics are parameters
-  ros::Subscriber info_watch_sub_;                ///< notes camera_info arrivals for the watchdog
+  /// Until the first frame is tracked: notes image and camera_info arrivals, so the watchdog can say
+  /// which one is missing (images are not deserialised).
+  ros::Subscriber image_watch_sub_, info_watch_sub_;
   std::string depth_topic_, info_topic_;
   std::mutex mailbox_mutex_;  ///< guards the members down to stopping_
   std::condition_variable mailbox_changed_;
   std::optional<Frame> pending_;
   uint32_t frames_received_ = 0;
   uint32_t frames_dropped_ = 0;
-  ros::WallTime last_frame_wall_, last_info_wall_;
+  ros::WallTime last_image_wall_, last_info_wall_;
   sensor_msgs::CameraInfoConstPtr last_info_;  ///< latest camera_info, to compare with parameters
   bool stopping_ = false;
   ros::Timer watchdog_timer_;
@@ -76,8 +78,7 @@ class TrackerServer {
   ros::Publisher status_pub_;
   image_transport::Publisher denoised_pub_;
   ros::Time last_stamp_;
-  uint32_t frames_processed_ = 0;
-  double sum_frame_ms_ = 0.0;
+  std::vector<double> frame_ms_;  ///< the node's whole cost of each processed frame
   bool warned_intrinsics_ = false;
   bool lost_ = false;
 
