@@ -7,23 +7,18 @@
 # fusion, publishing), ATE against the ground truth, and whether any frame on /tf had two parents;
 # the offline runner on the same frames gives the reference ATE and ms per frame.
 #   bash bench/node_bench.sh [SEQUENCE_DIR ...]   (default: fr1_xyz and redkitchen from SDF_TRACKER_DATA)
-#   RVIZ=true adds runs with rviz on (under xvfb-run).
-# Writes bench/results/<date>_node.md. No test asserts these figures.
+#   RUNS="idle busy rviz" picks the runs (default: idle busy); rviz runs with rviz on, under xvfb-run.
+# Writes bench/results/<date>_node.md (<date>_node_<runs>.md with RUNS). No test asserts these figures.
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 data="${SDF_TRACKER_DATA:-$repo/../shared/data}"
 work="$repo/build/bench/node"
-report="$repo/bench/results/$(date +%Y-%m-%d)_node.md"
+runs_name="${RUNS:-}"
+report="$repo/bench/results/$(date +%Y-%m-%d)_node${runs_name:+_${runs_name// /_}}.md"
 mkdir -p "$work" "$(dirname "$report")"
 
-bash "$repo/scripts/install_dependencies.sh"
-bash "$repo/scripts/build.sh"
-export PATH="/usr/bin:$PATH"
-set +u
-# shellcheck disable=SC1091
-source "$repo/build/ws/devel/setup.bash"
-set -u
-bin="$repo/build/ws/devel/lib/sdf_tracker"
+# shellcheck source=../scripts/workspace.sh
+source "$repo/scripts/workspace.sh"
 
 sequences=("$@")
 if [ ${#sequences[@]} -eq 0 ]; then
@@ -78,8 +73,7 @@ for sequence in "${sequences[@]}"; do
   off_ate=$(grep -oE "ATE  RMSE [0-9.]+" "$work/$name.offline/summary.txt" | awk '{print $3}')
   echo "| $name | offline | $frames of $frames | $off_ms | ${off_ate} m | - |" >> "$report"
 
-  runs=(idle busy)
-  [ "${RVIZ:-false}" = true ] && runs+=(rviz)
+  read -r -a runs <<< "${RUNS:-idle busy}"
   for run in "${runs[@]}"; do
     out="$work/$name.$run"
     mkdir -p "$out"

@@ -11,14 +11,8 @@ sequence="${1:-}"
 output="$(mkdir -p "${2:-$repo/output/main}" && cd "${2:-$repo/output/main}" && pwd)"
 rate="${RATE:-0.3}"
 
-bash "$repo/scripts/install_dependencies.sh"
-bash "$repo/scripts/build.sh"
-export PATH="/usr/bin:$PATH"
-set +u
-# shellcheck disable=SC1091
-source "$repo/build/ws/devel/setup.bash"
-set -u
-bin="$repo/build/ws/devel/lib/sdf_tracker"
+# shellcheck source=../scripts/workspace.sh
+source "$repo/scripts/workspace.sh"
 
 if [ -z "$sequence" ]; then
   sequence="$repo/output/default_sequence"

@@ -230,17 +230,17 @@ std::vector<ParameterSpec> buildTable() {
   t.push_back(bound<double>("MaxWeight", "", "Wmax, the weight cap of the running average", leftOpen(0.0, 1e9),
                             same(64.0), kLive, kAll, [](auto& s) -> auto& { return s.pipeline.integrator.max_weight; }));
   t.push_back(bound<int>("ImageWidth", "px", "image width (640, 320 or 160); scales the intrinsics", closed(1, 10000),
-                         same(640), kAtStart, kNodeOnly, [](auto& s) -> auto& { return s.image_width; }));
+                         same(640), kAtStart, kNodeOnly, [](auto& s) -> auto& { return s.camera.image_width; }));
   t.push_back(bound<int>("ImageHeight", "px", "image height (480, 240 or 120)", closed(1, 10000), same(480), kAtStart,
-                         kNodeOnly, [](auto& s) -> auto& { return s.image_height; }));
+                         kNodeOnly, [](auto& s) -> auto& { return s.camera.image_height; }));
   t.push_back(bound<double>("FocalLengthX", "px", "fx at 640x480; set: used instead of camera_info", closed(1.0, 1e5),
-                            same(520.0), kAtStart, kNodeOnly, [](auto& s) -> auto& { return s.camera_vga.fx; }));
+                            same(520.0), kAtStart, kNodeOnly, [](auto& s) -> auto& { return s.camera.vga.fx; }));
   t.push_back(bound<double>("FocalLengthY", "px", "fy at 640x480", closed(1.0, 1e5), same(520.0), kAtStart, kNodeOnly,
-                            [](auto& s) -> auto& { return s.camera_vga.fy; }));
+                            [](auto& s) -> auto& { return s.camera.vga.fy; }));
   t.push_back(bound<double>("CenterPointX", "px", "cx at 640x480", closed(0.0, 1e5), same(319.5), kAtStart, kNodeOnly,
-                            [](auto& s) -> auto& { return s.camera_vga.cx; }));
+                            [](auto& s) -> auto& { return s.camera.vga.cx; }));
   t.push_back(bound<double>("CenterPointY", "px", "cy at 640x480", closed(0.0, 1e5), same(239.5), kAtStart, kNodeOnly,
-                            [](auto& s) -> auto& { return s.camera_vga.cy; }));
+                            [](auto& s) -> auto& { return s.camera.vga.cy; }));
   // This package's own parameters.
   t.push_back(ParameterSpec{
       "TrackingSchedule", ParameterType::kText, "", "coarse-to-fine levels, stride x iterations, e.g. 4x12,2x6,1x2",
@@ -346,7 +346,7 @@ std::vector<std::string> Settings::validate() const {
                          " with CompactVoxels=true (got " + text(p.integrator.max_weight) + ")");
   }
   try {
-    camera();
+    camera.camera();
   } catch (const std::invalid_argument& e) {
     v.require(false, std::string("ImageWidth/ImageHeight: ") + e.what());
   }

@@ -87,6 +87,15 @@ geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T) {
   return pose;
 }
 
+Eigen::Isometry3d fromPoseMsg(const geometry_msgs::Pose& pose) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(pose.position.x, pose.position.y, pose.position.z);
+  T.linear() = Eigen::Quaterniond(pose.orientation.w, pose.orientation.x, pose.orientation.y, pose.orientation.z)
+                   .normalized()
+                   .toRotationMatrix();
+  return T;
+}
+
 visualization_msgs::Marker toMarker(const sdf_tracker::TriangleMesh& mesh, const std_msgs::Header& header,
                                     const Eigen::Isometry3d& T_frame_W) {
   visualization_msgs::Marker marker;

@@ -39,7 +39,7 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
   st::Settings settings;
   readParameters(pnh_, &settings, &options_, &unknown);
   for (const auto& name : unknown) ROS_WARN("sdf_tracker: ignoring unknown parameter ~%s", name.c_str());
-  camera_settings_ = settings;
+  camera_settings_ = settings.camera;
   state_.pipeline = std::make_unique<st::SdfPipeline>(settings.pipeline);
   if (options_.load_volume != "none" && !options_.load_volume.empty()) {
     state_.pipeline->setVolume(st::io::readVti(options_.load_volume, settings.pipeline.volume.compact_voxels));
@@ -290,8 +290,7 @@ void TrackerServer::checkInputs(const ros::TimerEvent&) {
 
 void TrackerServer::reconfigure(sdf_tracker::SdfTrackerConfig& config, uint32_t /*level*/) {
   std::lock_guard<std::mutex> lock(state_.mutex);
-  st::Settings candidate = camera_settings_;
-  candidate.pipeline = state_.pipeline->config();
+  st::Settings candidate{state_.pipeline->config(), camera_settings_};
   try {
     for (const auto& [name, value] : reconfigureValues(config)) st::setParameter(&candidate, name, value);
     st::throwIfInvalid("reconfiguration", candidate.validate());
@@ -299,9 +298,7 @@ void TrackerServer::reconfigure(sdf_tracker::SdfTrackerConfig& config, uint32_t 
     ROS_INFO("sdf_tracker: reconfigured");
   } catch (const std::invalid_argument& e) {
     ROS_ERROR("sdf_tracker: rejected reconfiguration: %s", e.what());
-    st::Settings in_force = camera_settings_;
-    in_force.pipeline = state_.pipeline->config();
-    config = toReconfigureConfig(in_force);  // reports the values still in force
+    config = toReconfigureConfig(st::Settings{state_.pipeline->config(), camera_settings_});  // reports the values still in force
   }
 }
 

@@ -23,6 +23,7 @@
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
+#include "sdf_tracker/ros/conversions.h"
 #include "sdf_tracker/ros/parameters.h"
 
 namespace {
@@ -66,8 +67,7 @@ class GroundTruthRelay {
     try {
       const Eigen::Isometry3d T_gt_camera = tf2::transformToEigen(tf_buffer_.lookupTransform(
           ground_truth_parent_ + suffix_, camera_frame_ + suffix_, first_->header.stamp));
-      Eigen::Isometry3d T_map_camera;
-      tf2::fromMsg(first_->pose, T_map_camera);
+      const Eigen::Isometry3d T_map_camera = sdf_tracker_ros::fromPoseMsg(first_->pose);
       geometry_msgs::TransformStamped alignment = tf2::eigenToTransform(T_map_camera * T_gt_camera.inverse());
       alignment.header.stamp = first_->header.stamp;
       alignment.header.frame_id = stripSlash(first_->header.frame_id);

@@ -19,6 +19,7 @@
 #include "sdf_tracker/core/parameters.h"
 #include "sdf_tracker/core/pipeline.h"
 #include "sdf_tracker/core/tum_sequence.h"
+#include "sdf_tracker/ros/conversions.h"
 #include "sdf_tracker/ros/parameters.h"
 
 namespace st = sdf_tracker;
@@ -41,11 +42,7 @@ class TumBagTest : public ::testing::Test {
   }
   void onPose(const geometry_msgs::PoseStamped& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.translation() = Eigen::Vector3d(msg.pose.position.x, msg.pose.position.y, msg.pose.position.z);
-    T.linear() = Eigen::Quaterniond(msg.pose.orientation.w, msg.pose.orientation.x, msg.pose.orientation.y,
-                                    msg.pose.orientation.z).toRotationMatrix();
-    poses_.push_back({msg.header.stamp.toSec(), T});
+    poses_.push_back({msg.header.stamp.toSec(), sdf_tracker_ros::fromPoseMsg(msg.pose)});
   }
   void onClock(const rosgraph_msgs::Clock& msg) {
     std::lock_guard<std::mutex> lock(mutex_);

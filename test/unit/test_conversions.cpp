@@ -144,6 +144,13 @@ TEST(Frames, GravityLevelsTheMapFrameAndKeepsTheViewingDirectionForward) {
   EXPECT_THROW(gravityAlignedMapFromOpticalWorld(Eigen::Vector3d::Zero()), std::invalid_argument);
 }
 
+TEST(Frames, PosesRoundTripThroughMessages) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(0.1, -2.0, 3.5);
+  EXPECT_TRUE(fromPoseMsg(toPoseMsg(T)).isApprox(T, 1e-12));
+}
+
 TEST(Frames, LeadingSlashesAreStripped) {
   EXPECT_EQ(stripSlash("/openni_depth_optical_frame"), "openni_depth_optical_frame");
   EXPECT_EQ(stripSlash("//map"), "map");

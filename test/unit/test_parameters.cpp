@@ -136,41 +136,5 @@ TEST(Parameters, PresetsMatchThePaperAndTheReferenceLaunchFile) {
   EXPECT_EQ(paper.pipeline.integrator.weighting, MeasurementWeighting::kConstant);
 }
 
-TEST(Pipeline, BadFramesLeaveMapAndPoseUntouched) {
-  Settings settings = preset("default");
-  settings.pipeline.volume.dims = Eigen::Vector3i(64, 64, 64);
-  settings.pipeline.volume.voxel_size_m = 0.04;
-  SdfPipeline pipeline(settings.pipeline);
-  const PinholeCamera camera = test::testCamera();
-  const FrameReport wrong_size = pipeline.processFrame(DepthImage(640, 480, 1.0f), camera);
-  EXPECT_EQ(wrong_size.track.status, TrackStatus::kBadInput);
-  const FrameReport empty = pipeline.processFrame(DepthImage(camera.width, camera.height, 0.0f), camera);
-  EXPECT_EQ(empty.track.status, TrackStatus::kBadInput);
-  EXPECT_FALSE(empty.fused);
-  const FrameReport too_near = pipeline.processFrame(DepthImage(camera.width, camera.height, 0.2f), camera);
-  EXPECT_EQ(too_near.track.status, TrackStatus::kBadInput) << "depth under MinDepth is no measurement";
-  for (size_t i = 0; i < pipeline.volume().voxelCount(); ++i) ASSERT_EQ(pipeline.volume().voxel(i).weight, 0.0f);
-  EXPECT_TRUE(pipeline.pose().isApprox(Eigen::Isometry3d::Identity()));
-}
-
-TEST(Pipeline, LiveUpdatesValidateAndRefuseGridChanges) {
-  Settings settings = preset("default");
-  settings.pipeline.volume.dims = Eigen::Vector3i(32, 32, 32);
-  SdfPipeline pipeline(settings.pipeline);
-  PipelineConfig candidate = pipeline.config();
-  candidate.integrator.max_weight = 10.0;
-  pipeline.updateConfig(candidate);
-  EXPECT_DOUBLE_EQ(pipeline.config().integrator.max_weight, 10.0);
-  candidate.integrator.max_weight = -1.0;
-  EXPECT_THROW(pipeline.updateConfig(candidate), std::invalid_argument);
-  EXPECT_DOUBLE_EQ(pipeline.config().integrator.max_weight, 10.0) << "a rejected update changes nothing";
-  candidate = pipeline.config();
-  candidate.volume.voxel_size_m = 0.05;
-  EXPECT_THROW(pipeline.updateConfig(candidate), std::invalid_argument);
-  candidate = pipeline.config();
-  candidate.volume.compact_voxels = true;
-  EXPECT_THROW(pipeline.updateConfig(candidate), std::invalid_argument) << "the storage belongs to the grid";
-}
-
 }  // namespace
 }  // namespace sdf_tracker

@@ -11,17 +11,22 @@
 
 namespace sdf_tracker {
 
-/// All user-facing settings: the pipeline plus the reference release's camera parameters
-/// (intrinsics given for 640x480 and scaled to ImageWidth x ImageHeight).
-struct Settings {
-  PipelineConfig pipeline;
-  PinholeCamera camera_vga;  ///< FocalLengthX/Y, CenterPointX/Y at 640x480
+/// The reference release's camera parameters: intrinsics given for 640x480 and scaled to
+/// ImageWidth x ImageHeight. The node reads them (when set) instead of camera_info.
+struct CameraSettings {
+  PinholeCamera vga;  ///< FocalLengthX/Y, CenterPointX/Y at 640x480
   int image_width = 640;
   int image_height = 480;
 
-  /// camera_vga at image_width x image_height; throws std::invalid_argument for a size that is not
+  /// `vga` at image_width x image_height; throws std::invalid_argument for a size that is not
   /// VGA, QVGA or QQVGA-like.
-  PinholeCamera camera() const { return camera_vga.scaledTo(image_width, image_height); }
+  PinholeCamera camera() const { return vga.scaledTo(image_width, image_height); }
+};
+
+/// All user-facing settings: the pipeline's configuration and the camera parameters.
+struct Settings {
+  PipelineConfig pipeline;
+  CameraSettings camera;
   /// Every violation, in the user's words: parameter names as typed ("CellSize must be in
   /// (0, 1] m (got -0.1)"), ranges of every table row and the rules that tie parameters together.
   std::vector<std::string> validate() const;

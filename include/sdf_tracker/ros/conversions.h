@@ -26,6 +26,7 @@ sensor_msgs::Image toImageMsg(const sdf_tracker::DepthImage& depth, const std_ms
 sdf_tracker::PinholeCamera toCamera(const sensor_msgs::CameraInfo& info);
 
 geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T);
+Eigen::Isometry3d fromPoseMsg(const geometry_msgs::Pose& pose);
 
 /// A triangle-list marker of the mesh; `T_frame_W` places the tracker's world in header.frame_id.
 visualization_msgs::Marker toMarker(const sdf_tracker::TriangleMesh& mesh, const std_msgs::Header& header,

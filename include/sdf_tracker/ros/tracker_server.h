@@ -50,9 +50,9 @@ class TrackerServer {
 
   ros::NodeHandle nh_, pnh_;
   NodeOptions options_;
-  /// The camera rows of the settings (FocalLength*, CenterPoint*, ImageWidth/Height); the
-  /// tracker's configuration itself lives only in the pipeline.
-  sdf_tracker::Settings camera_settings_;
+  /// FocalLength*, CenterPoint*, ImageWidth/Height; the tracker's configuration itself lives
+  /// only in the pipeline.
+  sdf_tracker::CameraSettings camera_settings_;
   TrackerState state_;
 
   // Frames in.

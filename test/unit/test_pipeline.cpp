@@ -1,0 +1,147 @@
+// The on-line loop: bad frames, live updates, tracking loss and recovery, motion prediction.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+
+#include "sdf_tracker/core/parameters.h"
+#include "sdf_tracker/core/pipeline.h"
+#include "sdf_tracker/core/synthetic.h"
+#include "test_helpers.h"
+
+namespace sdf_tracker {
+namespace {
+
+TEST(Pipeline, BadFramesLeaveMapAndPoseUntouched) {
+  Settings settings = preset("default");
+  settings.pipeline.volume.dims = Eigen::Vector3i(64, 64, 64);
+  settings.pipeline.volume.voxel_size_m = 0.04;
+  SdfPipeline pipeline(settings.pipeline);
+  const PinholeCamera camera = test::testCamera();
+  const FrameReport wrong_size = pipeline.processFrame(DepthImage(640, 480, 1.0f), camera);
+  EXPECT_EQ(wrong_size.track.status, TrackStatus::kBadInput);
+  const FrameReport empty = pipeline.processFrame(DepthImage(camera.width, camera.height, 0.0f), camera);
+  EXPECT_EQ(empty.track.status, TrackStatus::kBadInput);
+  EXPECT_FALSE(empty.fused);
+  const FrameReport too_near = pipeline.processFrame(DepthImage(camera.width, camera.height, 0.2f), camera);
+  EXPECT_EQ(too_near.track.status, TrackStatus::kBadInput) << "depth under MinDepth is no measurement";
+  for (size_t i = 0; i < pipeline.volume().voxelCount(); ++i) ASSERT_EQ(pipeline.volume().voxel(i).weight, 0.0f);
+  EXPECT_TRUE(pipeline.pose().isApprox(Eigen::Isometry3d::Identity()));
+}
+
+TEST(Pipeline, LiveUpdatesValidateAndRefuseGridChanges) {
+  Settings settings = preset("default");
+  settings.pipeline.volume.dims = Eigen::Vector3i(32, 32, 32);
+  SdfPipeline pipeline(settings.pipeline);
+  PipelineConfig candidate = pipeline.config();
+  candidate.integrator.max_weight = 10.0;
+  pipeline.updateConfig(candidate);
+  EXPECT_DOUBLE_EQ(pipeline.config().integrator.max_weight, 10.0);
+  candidate.integrator.max_weight = -1.0;
+  EXPECT_THROW(pipeline.updateConfig(candidate), std::invalid_argument);
+  EXPECT_DOUBLE_EQ(pipeline.config().integrator.max_weight, 10.0) << "a rejected update changes nothing";
+  candidate = pipeline.config();
+  candidate.volume.voxel_size_m = 0.05;
+  EXPECT_THROW(pipeline.updateConfig(candidate), std::invalid_argument);
+  candidate = pipeline.config();
+  candidate.volume.compact_voxels = true;
+  EXPECT_THROW(pipeline.updateConfig(candidate), std::invalid_argument) << "the storage belongs to the grid";
+}
+
+/// The default preset on a small grid around the synthetic room, for pipeline tests.
+PipelineConfig smallRoomPipeline() {
+  PipelineConfig config = preset("default").pipeline;
+  config.volume.dims = Eigen::Vector3i(128, 128, 128);
+  config.volume.voxel_size_m = 0.03;
+  config.initial_camera_in_grid = Eigen::Vector3d(0.5, 0.5, 0.1);
+  return config;
+}
+
+/// The sum of every voxel's weight: changes whenever anything is fused.
+double totalWeight(const TsdfVolume& volume) {
+  double sum = 0.0;
+  for (size_t i = 0; i < volume.voxelCount(); ++i) sum += volume.voxel(i).weight;
+  return sum;
+}
+
+constexpr double kFramePeriod_s = 1.0 / 30.0;
+constexpr double kDeskDuration_s = 10.0;
+
+TEST(Pipeline, ALostCameraHoldsItsPoseFusesNothingAndRelocalisesWhenItSeesTheMapAgain) {
+  SdfPipeline pipeline(smallRoomPipeline());
+  const PinholeCamera camera = test::testCamera();
+  // The tracker's world is the first camera's frame; the room is rendered in the scene's.
+  const Eigen::Isometry3d T_scene_W = synthetic::cameraPose(synthetic::Motion::kDesk, 0.0, kDeskDuration_s);
+  auto frameAt = [&](int i) {
+    return test::renderRoom(synthetic::cameraPose(synthetic::Motion::kDesk, i * kFramePeriod_s, kDeskDuration_s), camera);
+  };
+  int i = 0;
+  for (; i < 10; ++i) ASSERT_TRUE(pipeline.processFrame(frameAt(i), camera, i * kFramePeriod_s).track.ok()) << i;
+  const Eigen::Isometry3d held = pipeline.pose();
+  const double weight_before = totalWeight(pipeline.volume());
+
+  // The camera is carried far away (half a metre, 70 degrees): no frame may be tracked or fused.
+  const Eigen::Isometry3d away = test::perturbed(synthetic::cameraPose(synthetic::Motion::kDesk, i * kFramePeriod_s,
+                                                                       kDeskDuration_s), 0.5, 70.0 * M_PI / 180.0);
+  for (int k = 0; k < 15; ++k, ++i) {
+    const FrameReport report = pipeline.processFrame(test::renderRoom(away, camera), camera, i * kFramePeriod_s);
+    EXPECT_FALSE(report.track.ok()) << "frame " << i << " was tracked to a wrong pose";
+    EXPECT_FALSE(report.fused);
+  }
+  EXPECT_EQ(pipeline.consecutiveFailures(), 15);
+  EXPECT_EQ(totalWeight(pipeline.volume()), weight_before) << "nothing fused while lost";
+  EXPECT_TRUE(pipeline.pose().isApprox(held, 1e-9)) << "the pose is held";
+
+  // Back near where it was lost: tracking resumes by itself, at the right pose.
+  int resumed_at = -1;
+  for (int k = 0; k < 5 && resumed_at < 0; ++k) {
+    const int j = 10 + k;  // the path continues from the held pose
+    if (pipeline.processFrame(frameAt(j), camera, (i + k) * kFramePeriod_s).track.ok()) resumed_at = k;
+  }
+  ASSERT_GE(resumed_at, 0) << "did not relocalise";
+  EXPECT_EQ(pipeline.consecutiveFailures(), 0);
+  const Eigen::Isometry3d truth =
+      T_scene_W.inverse() * synthetic::cameraPose(synthetic::Motion::kDesk, (10 + resumed_at) * kFramePeriod_s,
+                                                  kDeskDuration_s);
+  EXPECT_LT((pipeline.pose().translation() - truth.translation()).norm(), 0.01);
+}
+
+TEST(Pipeline, MotionPredictionBridgesDroppedFramesWithFewerIterations) {
+  // Every third frame of the fast path, with its real timestamps: the camera moves three frames'
+  // worth between the frames the tracker sees.
+  const PinholeCamera camera = test::testCamera();
+  auto run = [&](bool predict, double* mean_iterations) {
+    PipelineConfig config = smallRoomPipeline();
+    config.predict_motion = predict;
+    SdfPipeline pipeline(config);
+    const Eigen::Isometry3d T_scene_W = synthetic::cameraPose(synthetic::Motion::kFast, 0.0, kDeskDuration_s);
+    int iterations = 0, frames = 0;
+    double worst_error_m = 0.0;
+    for (int i = 0; i < 60; i += 3) {
+      const double t = i * kFramePeriod_s;
+      const Eigen::Isometry3d T_scene_C = synthetic::cameraPose(synthetic::Motion::kFast, t, kDeskDuration_s);
+      const FrameReport report = pipeline.processFrame(test::renderRoom(T_scene_C, camera), camera, t);
+      EXPECT_TRUE(report.track.ok()) << "frame " << i << ": " << report.track.message;
+      for (int n : report.track.iterations_per_level) iterations += n;
+      ++frames;
+      worst_error_m = std::max(worst_error_m,
+                               (pipeline.pose().translation() - (T_scene_W.inverse() * T_scene_C).translation()).norm());
+    }
+    *mean_iterations = static_cast<double>(iterations) / frames;
+    return worst_error_m;
+  };
+  double iterations_predicted, iterations_plain;
+  const double error_predicted = run(true, &iterations_predicted);
+  const double error_plain = run(false, &iterations_plain);
+  std::cout << "[ figures  ] every third frame: " << iterations_predicted << " iterations per frame with prediction, "
+            << iterations_plain << " without; worst error " << error_predicted * 1000 << " / " << error_plain * 1000
+            << " mm\n";
+  EXPECT_LT(iterations_predicted, iterations_plain);
+  // On a 3 cm grid a single QVGA view leaves about a third of a voxel of bias, with or without.
+  const double half_voxel_m = 0.5 * smallRoomPipeline().volume.voxel_size_m;
+  EXPECT_LT(error_predicted, half_voxel_m);
+  EXPECT_LT(error_predicted, error_plain + 0.001) << "prediction must not make the estimate worse";
+}
+
+}  // namespace
+}  // namespace sdf_tracker
