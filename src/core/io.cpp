@@ -64,14 +64,6 @@ void writeVector3(std::ostream& out, const Eigen::Vector3f& v) {
   writeBinary(out, v.z());
 }
 
-std::string readWholeFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
-}
-
 /// The value of attribute `name` in the first element that has it, e.g. Spacing="0.1 0.1 0.1".
 std::string xmlAttribute(const std::string& text, const std::string& name, const std::string& path) {
   const std::string key = " " + name + "=\"";
@@ -95,12 +87,57 @@ Eigen::Matrix<T, N, 1> parseNumbers(const std::string& text, const std::string& 
 
 }  // namespace
 
-DepthImage readDepthPng(const std::string& path, double depth_factor) {
-  if (!(depth_factor > 0.0)) fail(path, "depth factor must be > 0 (got " + std::to_string(depth_factor) + ")");
+std::string PngHeader::describe() const {
+  const char* kind = colour_type == 0   ? "greyscale"
+                     : colour_type == 2 ? "RGB"
+                     : colour_type == 3 ? "palette"
+                     : colour_type == 4 ? "greyscale + alpha"
+                     : colour_type == 6 ? "RGBA"
+                                        : "unknown colour type";
+  return std::to_string(bit_depth) + "-bit " + kind;
+}
+
+PngHeader readPngHeader(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
+  unsigned char bytes[26];
+  in.read(reinterpret_cast<char*>(bytes), sizeof(bytes));
+  static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (in.gcount() != sizeof(bytes) || std::memcmp(bytes, kSignature, 8) != 0 || std::memcmp(bytes + 12, "IHDR", 4) != 0) {
+    fail(path, "not a PNG file (no PNG signature and header)");
+  }
+  auto bigEndian = [&](int at) {
+    return (static_cast<uint32_t>(bytes[at]) << 24) | (static_cast<uint32_t>(bytes[at + 1]) << 16) |
+           (static_cast<uint32_t>(bytes[at + 2]) << 8) | bytes[at + 3];
+  };
+  const uint32_t width = bigEndian(16), height = bigEndian(20);
+  if (width == 0 || height == 0 || width > 0x7fffffffu || height > 0x7fffffffu) {
+    fail(path, "PNG header gives an invalid size " + std::to_string(width) + "x" + std::to_string(height));
+  }
+  return {static_cast<int>(width), static_cast<int>(height), bytes[24], bytes[25]};
+}
+
+DepthImage readDepthPng(const std::string& path, double depth_factor, int expected_width, int expected_height) {
+  if (!(depth_factor > 0.0 && std::isfinite(depth_factor))) {
+    fail(path, "depth factor must be > 0 (got " + std::to_string(depth_factor) + ")");
+  }
+  const PngHeader header = readPngHeader(path);
+  if (header.colour_type != 0 || header.bit_depth != 16) {
+    fail(path, "depth must be a 16-bit greyscale PNG (got " + header.describe() + ")");
+  }
+  if (expected_width > 0 && (header.width != expected_width || header.height != expected_height)) {
+    fail(path, "image is " + std::to_string(header.width) + "x" + std::to_string(header.height) +
+                   " but the intrinsics are for " + std::to_string(expected_width) + "x" +
+                   std::to_string(expected_height));
+  }
+  if (static_cast<long long>(header.width) * header.height > kMaxImagePixels) {
+    fail(path, "image is " + std::to_string(header.width) + "x" + std::to_string(header.height) +
+                   ", larger than any depth camera's (at most " + std::to_string(kMaxImagePixels) + " pixels)");
+  }
   const cv::Mat raw = cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_GRAYSCALE);
-  if (raw.empty()) fail(path, "cannot read as an image (missing or corrupt)");
-  if (raw.type() != CV_16UC1) {
-    fail(path, "depth must be a 16-bit single-channel PNG (got OpenCV type " + std::to_string(raw.type()) + ")");
+  if (raw.empty()) fail(path, "cannot decode the PNG (corrupt?)");
+  if (raw.type() != CV_16UC1 || raw.cols != header.width || raw.rows != header.height) {
+    fail(path, "decoded image does not match its PNG header (corrupt?)");
   }
   return DepthImage::fromRaw16(raw.ptr<uint16_t>(), raw.cols, raw.rows, depth_factor);
 }
@@ -188,8 +225,9 @@ TriangleMesh readPlyMesh(const std::string& path) {
       if (format != "binary_little_endian" && format != "ascii") fail(path, "unsupported PLY format " + format);
       binary = format == "binary_little_endian";
     } else if (keyword == "element") {
-      size_t count = 0;
+      long long count = -1;
       words >> element >> count;
+      if (count < 0) fail(path, "element " + element + " needs a count of at least 0 (\"" + line + "\")");
       if (element == "vertex") vertex_count = count;
       if (element == "face") face_count = count;
     } else if (keyword == "property" && element == "vertex") {
@@ -201,6 +239,18 @@ TriangleMesh readPlyMesh(const std::string& path) {
   }
   if (line != "end_header") fail(path, "PLY header has no end_header");
   if (vertex_floats < 3) fail(path, "PLY vertices need x, y and z");
+  // The counts are the file's word: check them against its size before allocating anything.
+  const std::streamoff body_start = in.tellg();
+  in.seekg(0, std::ios::end);
+  const uint64_t body_bytes = static_cast<uint64_t>(in.tellg() - body_start);
+  in.seekg(body_start);
+  const uint64_t min_vertex_bytes = binary ? 4ull * vertex_floats : 2ull * vertex_floats;  // "0 " per value
+  const uint64_t min_face_bytes = binary ? 13 : 8;                                          // "3 0 1 2\n"
+  if (vertex_count > body_bytes / min_vertex_bytes || face_count > body_bytes / min_face_bytes ||
+      vertex_count * min_vertex_bytes + face_count * min_face_bytes > body_bytes) {
+    fail(path, "header claims " + std::to_string(vertex_count) + " vertices and " + std::to_string(face_count) +
+                   " faces, more than its " + std::to_string(body_bytes) + " bytes can hold");
+  }
   TriangleMesh mesh;
   mesh.vertices_W.resize(vertex_count);
   std::vector<float> values(vertex_floats);
@@ -227,7 +277,7 @@ TriangleMesh readPlyMesh(const std::string& path) {
     }
     if (!in) fail(path, "PLY ends inside face " + std::to_string(i) + " of " + std::to_string(face_count));
     if (corners != 3) fail(path, "face " + std::to_string(i) + " has " + std::to_string(corners) + " corners, not 3");
-    if (t.minCoeff() < 0 || t.maxCoeff() >= static_cast<int>(vertex_count)) {
+    if (t.minCoeff() < 0 || static_cast<uint64_t>(t.maxCoeff()) >= vertex_count) {
       fail(path, "face " + std::to_string(i) + " indexes a vertex that does not exist");
     }
     mesh.triangles[i] = t;
@@ -271,17 +321,34 @@ void writeVti(const std::string& path, const TsdfVolume& volume) {
 }
 
 TsdfVolume readVti(const std::string& path, bool compact_voxels) {
-  const std::string text = readWholeFile(path);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
+  in.seekg(0, std::ios::end);
+  const uint64_t file_bytes = static_cast<uint64_t>(in.tellg());
+  in.seekg(0);
+  // The XML header ends where the raw data starts; it is small (our writer's is under 1 KiB).
+  constexpr size_t kMaxHeaderBytes = 64 * 1024;
+  std::string text(static_cast<size_t>(std::min<uint64_t>(file_bytes, kMaxHeaderBytes)), '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
   if (text.find("<VTKFile type=\"ImageData\"") == std::string::npos) fail(path, "not a VTK ImageData (.vti) file");
   const size_t data_marker = text.find("<AppendedData encoding=\"raw\">");
-  if (data_marker == std::string::npos) fail(path, "no raw AppendedData section");
+  if (data_marker == std::string::npos) fail(path, "no raw AppendedData section in its first 64 KiB");
+  const size_t underscore = text.find('_', data_marker);
+  if (underscore == std::string::npos) fail(path, "AppendedData has no '_' marker");
   const std::string header = text.substr(0, data_marker);
   if (xmlAttribute(header, "header_type", path) != "UInt64") fail(path, "header_type must be UInt64");
 
   const auto extent = parseNumbers<int, 6>(xmlAttribute(header, "WholeExtent", path), "WholeExtent", path);
   const auto spacing = parseNumbers<double, 3>(xmlAttribute(header, "Spacing", path), "Spacing", path);
   VolumeConfig config;
-  config.dims = Eigen::Vector3i(extent[1] - extent[0] + 1, extent[3] - extent[2] + 1, extent[5] - extent[4] + 1);
+  for (int axis = 0; axis < 3; ++axis) {  // in 64 bits: the extent is the file's word, not ours
+    const long long size = static_cast<long long>(extent[2 * axis + 1]) - extent[2 * axis] + 1;
+    if (size < 2 || size > 4096) {
+      fail(path, "WholeExtent " + xmlAttribute(header, "WholeExtent", path) + " gives " + std::to_string(size) +
+                     " samples along an axis (2 to 4096 allowed)");
+    }
+    config.dims[axis] = static_cast<int>(size);
+  }
   config.origin_W = parseNumbers<double, 3>(xmlAttribute(header, "Origin", path), "Origin", path);
   config.voxel_size_m = spacing.x();
   config.compact_voxels = compact_voxels;
@@ -293,39 +360,47 @@ TsdfVolume readVti(const std::string& path, bool compact_voxels) {
   if (truncation_at == std::string::npos) fail(path, "missing field positive_truncation_m");
   config.positive_truncation_m =
       parseNumbers<double, 1>(header.substr(header.find('>', truncation_at) + 1), "positive_truncation_m", path)[0];
-  const auto violations = config.validate();
+  const auto violations = config.validate();  // includes the memory budget of the grid
   if (!violations.empty()) fail(path, "invalid volume geometry: " + violations.front());
 
-  std::vector<Voxel> voxels(static_cast<size_t>(config.dims.x()) * config.dims.y() * config.dims.z());
-  const uint64_t array_bytes = voxels.size() * sizeof(float);
-  size_t cursor = text.find('_', data_marker);
-  if (cursor == std::string::npos) fail(path, "AppendedData has no '_' marker");
-  ++cursor;
-  for (int field = 0; field < 2; ++field) {
-    uint64_t bytes = 0;
-    if (cursor + sizeof(bytes) > text.size()) fail(path, "file is truncated");
-    std::memcpy(&bytes, text.data() + cursor, sizeof(bytes));
-    cursor += sizeof(bytes);
-    if (bytes != array_bytes) {
-      fail(path, "array " + std::to_string(field) + " holds " + std::to_string(bytes) + " bytes, expected " +
-                     std::to_string(array_bytes));
-    }
-    if (cursor + bytes > text.size()) fail(path, "file is truncated inside the voxel data");
-    const float* values = reinterpret_cast<const float*>(text.data() + cursor);
-    for (size_t i = 0; i < voxels.size(); ++i) {
-      float value;
-      std::memcpy(&value, values + i, sizeof(float));
-      if (!std::isfinite(value) || (field == 1 && value < 0.0f)) {
-        fail(path, std::string(field == 0 ? "distance" : "weight") + " of voxel " + std::to_string(i) +
-                       " is invalid (" + std::to_string(value) + ")");
-      }
-      (field == 0 ? voxels[i].distance_m : voxels[i].weight) = value;
-    }
-    cursor += bytes;
+  // The file must hold both arrays before anything is allocated for them: a short file that
+  // claims a large grid is refused here, not after allocating the grid.
+  const uint64_t voxel_count = static_cast<uint64_t>(config.dims.x()) * config.dims.y() * config.dims.z();
+  const uint64_t array_bytes = voxel_count * sizeof(float);
+  const uint64_t data_start = underscore + 1;
+  if (file_bytes < data_start || file_bytes - data_start < 2 * (sizeof(uint64_t) + array_bytes)) {
+    fail(path, "file is truncated: its header describes " + std::to_string(config.dims.x()) + "x" +
+                   std::to_string(config.dims.y()) + "x" + std::to_string(config.dims.z()) + " voxels (" +
+                   std::to_string(2 * array_bytes) + " bytes of data) but it holds " +
+                   std::to_string(file_bytes > data_start ? file_bytes - data_start : 0) + " bytes after the header");
   }
-  TsdfVolume volume(config);
-  for (size_t i = 0; i < voxels.size(); ++i) volume.setVoxel(i, voxels[i]);
-  return volume;
+  try {
+    TsdfVolume volume(config);
+    std::vector<float> distances(voxel_count), values(voxel_count);
+    in.clear();
+    in.seekg(static_cast<std::streamoff>(data_start));
+    for (int field = 0; field < 2; ++field) {
+      uint64_t bytes = 0;
+      in.read(reinterpret_cast<char*>(&bytes), sizeof(bytes));
+      if (bytes != array_bytes) {
+        fail(path, "array " + std::to_string(field) + " holds " + std::to_string(bytes) + " bytes, expected " +
+                       std::to_string(array_bytes));
+      }
+      std::vector<float>& target = field == 0 ? distances : values;
+      in.read(reinterpret_cast<char*>(target.data()), static_cast<std::streamsize>(array_bytes));
+      if (!in) fail(path, "file is truncated inside the voxel data");
+      for (size_t i = 0; i < voxel_count; ++i) {
+        if (!std::isfinite(target[i]) || (field == 1 && target[i] < 0.0f)) {
+          fail(path, std::string(field == 0 ? "distance" : "weight") + " of voxel " + std::to_string(i) +
+                         " is invalid (" + std::to_string(target[i]) + ")");
+        }
+      }
+    }
+    for (size_t i = 0; i < voxel_count; ++i) volume.setVoxel(i, Voxel{distances[i], values[i]});
+    return volume;
+  } catch (const std::bad_alloc&) {
+    fail(path, "not enough memory for its " + std::to_string(voxel_count) + " voxels");
+  }
 }
 
 void writeTrajectory(const std::string& path, const std::vector<StampedPose>& poses) {

@@ -72,6 +72,8 @@ const std::map<std::string, OptionSetter>& nodeOptionTable() {
          }
          o.path_length = static_cast<int>(n);
        }},
+      {"time_jump_reset",
+       [](NodeOptions& o, const st::ParameterValue& v) { o.time_jump_reset_s = nonNegativeOf("time_jump_reset", v); }},
       {"trajectory_file",
        [](NodeOptions& o, const st::ParameterValue& v) { o.trajectory_file = textOf("trajectory_file", v); }},
       {"mesh_file", [](NodeOptions& o, const st::ParameterValue& v) { o.mesh_file = textOf("mesh_file", v); }},

@@ -208,10 +208,24 @@ void TrackerServer::process(const Frame& frame) {
       poses_->clearPath();
     }
     if (!last_stamp_.isZero() && image.header.stamp <= last_stamp_) {
-      ROS_WARN_THROTTLE(kThrottle_s, "sdf_tracker: dropping a frame stamped %.6f, not after the last one (%.6f): "
-                        "time went backwards (bag restarted? call ~reset to start a new map)",
-                        image.header.stamp.toSec(), last_stamp_.toSec());
-      return;
+      const double back_s = (last_stamp_ - image.header.stamp).toSec();
+      if (options_.time_jump_reset_s > 0.0 && back_s > options_.time_jump_reset_s) {
+        ROS_WARN("sdf_tracker: time jumped back %.3f s (from %.6f to %.6f), more than ~time_jump_reset (%.3f s): "
+                 "restarting the map", back_s, last_stamp_.toSec(), image.header.stamp.toSec(),
+                 options_.time_jump_reset_s);
+        state_.pipeline->reset();
+        state_.trajectory.clear();
+        poses_->clearPath();
+      } else {
+        // One stray stamp (0, a clock jump) must not wipe the map: the frame is dropped.
+        ROS_WARN_THROTTLE(kThrottle_s, "sdf_tracker: dropping a frame stamped %.6f, %.3f s before the last one "
+                          "(%.6f); call ~reset (or set ~time_jump_reset) to start a new map after a jump back",
+                          image.header.stamp.toSec(), back_s, last_stamp_.toSec());
+        status.status = sdf_tracker::TrackingStatus::BAD_INPUT;
+        status.status_text = "bad_input: stamped before the last frame";
+        status_pub_.publish(status);
+        return;
+      }
     }
     report = state_.pipeline->processFrame(depth, camera, image.header.stamp.toSec());
     if (report.track.status == st::TrackStatus::kBadInput) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -56,7 +57,9 @@ double CommandLine::getDouble(const std::string& name, double fallback) const {
 
 int CommandLine::getInt(const std::string& name, int fallback) const {
   const double value = getDouble(name, fallback);
-  if (value != std::floor(value)) throw std::invalid_argument("--" + name + ": expected an integer, got \"" + get(name) + "\"");
+  if (value != std::floor(value) || value < std::numeric_limits<int>::min() || value > std::numeric_limits<int>::max()) {
+    throw std::invalid_argument("--" + name + ": expected a whole number, got \"" + get(name) + "\"");
+  }
   return static_cast<int>(value);
 }
 

@@ -1,6 +1,7 @@
 #include "report.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iomanip>
 #include <sstream>
@@ -39,8 +40,10 @@ struct PlotFrame {
     }
   }
   cv::Point toPixel(double x, double y) const {
-    return {area.x + static_cast<int>((x - x0) / (x1 - x0) * area.width),
-            area.y + area.height - static_cast<int>((y - y0) / (y1 - y0) * area.height)};
+    // Clamped before conversion: a wild estimate must not overflow int (undefined behaviour).
+    auto pixel = [](double offset) { return static_cast<int>(std::clamp(std::isfinite(offset) ? offset : 0.0, -1e6, 1e6)); };
+    return {area.x + pixel((x - x0) / (x1 - x0) * area.width),
+            area.y + area.height - pixel((y - y0) / (y1 - y0) * area.height)};
   }
   void drawAxes(cv::Mat& image, const std::string& x_label, const std::string& y_label) const {
     cv::rectangle(image, area, kBlack, 1);
@@ -127,6 +130,31 @@ void writeAccuracyPlot(const std::string& path, const Accuracy& accuracy, const 
   cv::putText(image, "RMSE " + fixed(accuracy.ate.translation_m.rmse, 4) + " m", {600, 630}, cv::FONT_HERSHEY_SIMPLEX, 0.5,
               kErrorColour, 1, cv::LINE_AA);
   if (!cv::imwrite(path, image)) throw std::runtime_error(path + ": cannot write the plot");
+}
+
+std::string jsonString(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (byte < 0x20) {
+      char escaped[8];
+      std::snprintf(escaped, sizeof(escaped), "\\u%04x", byte);
+      out += escaped;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string jsonNumber(double value) {
+  if (!std::isfinite(value)) return "null";
+  std::ostringstream s;
+  s << std::setprecision(9) << value;
+  return s.str();
 }
 
 ProgressBar::ProgressBar(size_t total, bool enabled)

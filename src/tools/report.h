@@ -25,6 +25,10 @@ std::string formatAccuracy(const Accuracy& accuracy);
 /// ground truth), and the absolute error over time. Written as PNG.
 void writeAccuracyPlot(const std::string& path, const Accuracy& accuracy, const std::string& title);
 
+/// JSON text of a string (quoted, escaped) and of a number (null when not finite).
+std::string jsonString(const std::string& text);
+std::string jsonNumber(double value);
+
 /// A one-line progress bar with the processing rate, redrawn on stderr.
 class ProgressBar {
  public:

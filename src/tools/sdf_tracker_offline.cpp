@@ -17,6 +17,7 @@
 #endif
 
 #include "command_line.h"
+#include "output_folder.h"
 #include "report.h"
 #include "sdf_tracker/core/io.h"
 #include "sdf_tracker/core/parameters.h"
@@ -115,14 +116,21 @@ int run(int argc, char** argv) {
   st::throwIfInvalid("parameters", settings.validate());
 #ifdef _OPENMP
   if (args.has("threads")) {
+    // More threads than a few per core only cost memory and time (and thousands fail to start).
+    const int cores = std::max(1, omp_get_num_procs());
+    const int max_threads = std::max(8, 4 * cores);
     const int threads = args.getInt("threads", 0);
-    if (threads < 1) throw std::invalid_argument("--threads must be >= 1 (got " + std::to_string(threads) + ")");
+    if (threads < 1 || threads > max_threads) {
+      throw std::invalid_argument("--threads must be in [1, " + std::to_string(max_threads) + "] on this machine (" +
+                                  std::to_string(cores) + " cores; got " + args.get("threads") + ")");
+    }
     omp_set_num_threads(threads);
   }
 #endif
 
   const std::string sequence_dir = args.require("sequence");
   const std::string output_dir = args.require("output");
+  if (output_dir.empty()) throw std::invalid_argument("--output must name a folder (got an empty path)");
   st::SequenceOptions options;
   if (args.has("depth-factor")) options.depth_factor = args.getDouble("depth-factor", 0.0);
   if (args.has("intrinsics")) options.camera = parseIntrinsics(args.get("intrinsics"), st::PinholeCamera::tumFreiburg1());
@@ -132,20 +140,27 @@ int run(int argc, char** argv) {
     if (frames < 1) throw std::invalid_argument("--frames must be >= 1 (got " + std::to_string(frames) + ")");
     sequence.truncate(static_cast<size_t>(frames));
   }
-  st::io::makeDirectories(output_dir);
+  const std::vector<std::string> summaries = {"summary.txt", "summary.json"};
+  st::tools::OutputFolder output(output_dir, {"trajectory.txt", "frames.csv", "mesh.ply", "cloud.ply", "sdf_volume.vti",
+                                              "triangles.obj", "trajectory.png", "summary.txt", "summary.json"});
   const st::PinholeCamera& camera = sequence.camera();
   std::cout << "sequence " << sequence_dir << ": " << sequence.size() << " frames, " << camera.width << "x"
             << camera.height << ", fx " << camera.fx << " fy " << camera.fy << " cx " << camera.cx << " cy "
             << camera.cy << " (" << sequence.intrinsicsSource() << "), depth factor " << sequence.depthFactor()
             << "\n";
-  const auto& v = settings.pipeline.volume;
-  std::cout << "preset " << args.get("preset", "default") << ": grid " << v.dims.x() << "x" << v.dims.y() << "x"
-            << v.dims.z() << " of " << v.voxel_size_m << " m, truncation " << v.positive_truncation_m << " / "
-            << settings.pipeline.integrator.negative_truncation_m << " m, schedule "
-            << st::formatSchedule(settings.pipeline.tracker.levels) << "\n";
-
   st::SdfPipeline pipeline(settings.pipeline);
-  if (args.has("load-volume")) pipeline.setVolume(st::io::readVti(args.get("load-volume")));
+  if (args.has("load-volume")) {
+    pipeline.setVolume(st::io::readVti(args.get("load-volume"), settings.pipeline.volume.compact_voxels));
+    // The file's grid replaces the configured one: the rules between parameters must hold for it.
+    st::throwIfInvalid("parameters with the grid of " + args.get("load-volume"),
+                       st::Settings{pipeline.config(), settings.camera}.validate());
+  }
+  const auto& v = pipeline.config().volume;
+  std::cout << "preset " << args.get("preset", "default") << ": grid " << v.dims.x() << "x" << v.dims.y() << "x"
+            << v.dims.z() << " of " << v.voxel_size_m << " m"
+            << (args.has("load-volume") ? " (from " + args.get("load-volume") + ")" : std::string()) << ", truncation "
+            << v.positive_truncation_m << " / " << pipeline.config().integrator.negative_truncation_m
+            << " m, schedule " << st::formatSchedule(pipeline.config().tracker.levels) << "\n";
 
   std::ostringstream frames_csv;
   frames_csv << "timestamp,status,iterations,rms_residual_m,valid_points,inverse_condition,tracking_ms,fusion_ms,"
@@ -185,20 +200,22 @@ int run(int argc, char** argv) {
   progress.finish();
   const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  st::io::writeTrajectory(output_dir + "/trajectory.txt", trajectory);
-  st::io::writeTextFile(output_dir + "/frames.csv", frames_csv.str());
+  st::io::writeTrajectory(output.path("trajectory.txt"), trajectory);
+  st::io::writeTextFile(output.path("frames.csv"), frames_csv.str());
   const st::TriangleMesh mesh = st::extractMesh(pipeline.volume());
-  st::io::writePly(output_dir + "/mesh.ply", mesh);
-  st::io::writePly(output_dir + "/cloud.ply", st::extractSurfaceCloud(pipeline.volume()));
+  st::io::writePly(output.path("mesh.ply"), mesh);
+  st::io::writePly(output.path("cloud.ply"), st::extractSurfaceCloud(pipeline.volume()));
   if (args.has("save-volume")) {
-    st::io::writeVti(output_dir + "/sdf_volume.vti", pipeline.volume());
-    st::io::writeObj(output_dir + "/triangles.obj", mesh);
+    st::io::writeVti(output.path("sdf_volume.vti"), pipeline.volume());
+    st::io::writeObj(output.path("triangles.obj"), mesh);
   }
 
   struct rusage usage;
   ::getrusage(RUSAGE_SELF, &usage);
   const double peak_rss_mb = usage.ru_maxrss / 1024.0;  // Linux reports kilobytes
 
+  // Every frame after the first is tracked against the map the first one started.
+  const size_t tracked = sequence.size() - failed - 1;
   std::ostringstream summary;
   summary << std::fixed << std::setprecision(2);
   summary << "frames " << sequence.size() << ", tracked ok " << sequence.size() - failed << ", failed " << failed
@@ -211,15 +228,14 @@ int run(int argc, char** argv) {
           << " MiB\n";
 
   // The same figures for scripts (bench/), as JSON.
+  using st::tools::jsonNumber;
+  using st::tools::jsonString;
   std::ostringstream json;
-  std::string sequence_json = sequence_dir;
-  for (size_t at = 0; (at = sequence_json.find_first_of("\"\\", at)) != std::string::npos; at += 2) {
-    sequence_json.insert(at, "\\");
-  }
-  json << std::setprecision(6) << "{\n  \"sequence\": \"" << sequence_json << "\",\n  \"preset\": \""
-       << args.get("preset", "default") << "\",\n  \"frames\": " << sequence.size() << ",\n  \"failed_frames\": " << failed
-       << ",\n  \"grid\": [" << v.dims.x() << ", " << v.dims.y() << ", " << v.dims.z() << "],\n  \"voxel_count\": "
-       << pipeline.volume().voxelCount() << ",\n  \"voxel_size_m\": " << v.voxel_size_m
+  json << "{\n  \"sequence\": " << jsonString(sequence_dir) << ",\n  \"preset\": "
+       << jsonString(args.get("preset", "default")) << ",\n  \"frames\": " << sequence.size()
+       << ",\n  \"failed_frames\": " << failed << ",\n  \"grid\": [" << v.dims.x() << ", " << v.dims.y() << ", "
+       << v.dims.z() << "],\n  \"voxel_count\": " << pipeline.volume().voxelCount()
+       << ",\n  \"voxel_size_m\": " << jsonNumber(v.voxel_size_m)
        << ",\n  \"compact_voxels\": " << (v.compact_voxels ? "true" : "false")
 #ifdef _OPENMP
        << ",\n  \"threads\": " << omp_get_max_threads()
@@ -228,30 +244,37 @@ int run(int argc, char** argv) {
   const std::vector<std::pair<const char*, const std::vector<double>*>> stages = {
       {"frame", &frame_ms}, {"tracking", &tracking_ms}, {"fusion", &fusion_ms}, {"raycast", &raycast_ms}};
   for (size_t i = 0; i < stages.size(); ++i) {
-    json << (i ? ", " : "") << "\"" << stages[i].first << "_median\": " << percentile(*stages[i].second, 0.5) << ", \""
-         << stages[i].first << "_p95\": " << percentile(*stages[i].second, 0.95);
+    json << (i ? ", " : "") << "\"" << stages[i].first << "_median\": " << jsonNumber(percentile(*stages[i].second, 0.5))
+         << ", \"" << stages[i].first << "_p95\": " << jsonNumber(percentile(*stages[i].second, 0.95));
   }
-  json << "},\n  \"peak_rss_mb\": " << peak_rss_mb << ",\n  \"grid_mb\": " << pipeline.volume().memoryBytes() / 1048576.0
-       << ",\n  \"elapsed_s\": " << elapsed_s;
+  json << "},\n  \"peak_rss_mb\": " << jsonNumber(peak_rss_mb)
+       << ",\n  \"grid_mb\": " << jsonNumber(pipeline.volume().memoryBytes() / 1048576.0)
+       << ",\n  \"elapsed_s\": " << jsonNumber(elapsed_s);
   if (!sequence.groundTruth().empty()) {
-    const auto accuracy = st::tools::evaluateAccuracy(trajectory, sequence.groundTruth());
-    summary << st::tools::formatAccuracy(accuracy);
-    st::tools::writeAccuracyPlot(output_dir + "/trajectory.png", accuracy, "sdf_tracker on " + sequence_dir);
-    const auto& ate = accuracy.ate.translation_m;
-    json << ",\n  \"ate_m\": {\"rmse\": " << ate.rmse << ", \"mean\": " << ate.mean << ", \"median\": " << ate.median
-         << ", \"max\": " << ate.max << "}";
-    if (accuracy.rpe.translation_m_per_s.count > 0) {
-      json << ",\n  \"rpe\": {\"m_per_s\": " << accuracy.rpe.translation_m_per_s.rmse
-           << ", \"deg_per_s\": " << accuracy.rpe.rotation_deg_per_s.rmse << "}";
+    try {
+      const auto accuracy = st::tools::evaluateAccuracy(trajectory, sequence.groundTruth());
+      summary << st::tools::formatAccuracy(accuracy);
+      st::tools::writeAccuracyPlot(output.path("trajectory.png"), accuracy, "sdf_tracker on " + sequence_dir);
+      const auto& ate = accuracy.ate.translation_m;
+      json << ",\n  \"ate_m\": {\"rmse\": " << jsonNumber(ate.rmse) << ", \"mean\": " << jsonNumber(ate.mean)
+           << ", \"median\": " << jsonNumber(ate.median) << ", \"max\": " << jsonNumber(ate.max) << "}";
+      if (accuracy.rpe.translation_m_per_s.count > 0) {
+        json << ",\n  \"rpe\": {\"m_per_s\": " << jsonNumber(accuracy.rpe.translation_m_per_s.rmse)
+             << ", \"deg_per_s\": " << jsonNumber(accuracy.rpe.rotation_deg_per_s.rmse) << "}";
+      }
+    } catch (const std::invalid_argument& e) {  // too few poses to align
+      summary << "accuracy not evaluated: " << e.what() << "\n";
     }
   } else {
     summary << "no groundtruth.txt: accuracy not evaluated\n";
   }
   json << "\n}\n";
-  st::io::writeTextFile(output_dir + "/summary.txt", summary.str());
-  st::io::writeTextFile(output_dir + "/summary.json", json.str());
+  if (sequence.size() > 1 && tracked == 0) summary << "no frame could be tracked after the first\n";
+  st::io::writeTextFile(output.path("summary.txt"), summary.str());
+  st::io::writeTextFile(output.path("summary.json"), json.str());
+  output.commit(summaries);
   std::cout << summary.str() << "results in " << output_dir << "\n";
-  return 0;
+  return sequence.size() > 1 && tracked == 0 ? 1 : 0;
 }
 
 }  // namespace

@@ -20,6 +20,7 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/buffer.h>
+#include <std_srvs/Empty.h>
 #include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
@@ -197,7 +198,8 @@ TEST_F(NodeTest, TracksAQvgaBagLikeTheOfflineRunnerAndSurvivesBadInput) {
 }
 
 TEST_F(NodeTest, SaveMeshWritesAPlyThatLoadsBack) {
-  // The map holds the previous test's frames when run in order; feed a few here regardless.
+  ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
+  // Three frames of its own after a reset, whatever ran before.
   const st::PinholeCamera camera = st::PinholeCamera::tumFreiburg1().scaledTo(320, 240);
   st::synthetic::NoiseModel exact;
   exact.enabled = false;
@@ -215,6 +217,32 @@ TEST_F(NodeTest, SaveMeshWritesAPlyThatLoadsBack) {
   EXPECT_TRUE(save.response.success) << save.response.message;
   const st::TriangleMesh mesh = st::io::readPlyMesh(save.request.path);
   EXPECT_GT(mesh.triangles.size(), 1000u);
+}
+
+TEST_F(NodeTest, AFrameFromThePastIsDroppedWithoutWipingTheMap) {
+  const st::PinholeCamera camera = st::PinholeCamera::tumFreiburg1().scaledTo(320, 240);
+  st::synthetic::NoiseModel exact;
+  exact.enabled = false;
+  auto frameAt = [&](double stamp_s, double t_s) {
+    std_msgs::Header header;
+    header.stamp = ros::Time(stamp_s);
+    header.frame_id = "camera_depth_optical_frame";
+    const auto T = st::synthetic::cameraPose(st::synthetic::Motion::kDesk, t_s, 10.0);
+    return sdf_tracker_ros::toImageMsg(st::synthetic::Scene::indoorRoom().render(camera, T, exact, 0), header);
+  };
+  ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
+  for (int i = 0; i < 3; ++i) publishAndWait(frameAt(300.0 + i / 30.0, i / 30.0), camera);
+  const size_t poses_before = poses_.size();
+  // A stray frame stamped 0.5 s (a restarted clock): dropped and said, the map and path kept.
+  const auto stray = publishAndWait(frameAt(0.5, 3 / 30.0), camera);
+  EXPECT_EQ(stray.status, sdf_tracker::TrackingStatus::BAD_INPUT);
+  EXPECT_NE(stray.status_text.find("before the last frame"), std::string::npos) << stray.status_text;
+  const auto next = publishAndWait(frameAt(300.0 + 4 / 30.0, 4 / 30.0), camera);
+  EXPECT_EQ(next.status, sdf_tracker::TrackingStatus::OK) << next.status_text << ": the map is still there";
+  ros::Duration(0.3).sleep();
+  std::lock_guard<std::mutex> lock(mutex_);
+  EXPECT_EQ(poses_.size(), poses_before + 1);
+  EXPECT_EQ(path_length_, 4u) << "the path holds the four tracked frames since the reset";
 }
 
 TEST_F(NodeTest, NeverGivesAFrameThatHasAParentASecondOne) {
@@ -236,6 +264,7 @@ TEST_F(NodeTest, NeverGivesAFrameThatHasAParentASecondOne) {
     }
   });
   ros::Duration(1.0).sleep();  // the node's tf listener hears the static transform
+  ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
 
   const st::PinholeCamera camera = st::PinholeCamera::tumFreiburg1().scaledTo(320, 240);
   st::synthetic::NoiseModel exact;
@@ -338,7 +367,9 @@ TEST_F(NodeTest, EveryLiveParameterIsReconfigurableAndEveryOutOfRangeValueIsRefu
   // A refused change reports what is in force in the pipeline: every accepted value is there.
   const auto in_force = reconfigure("MaxWeight", -5.0);
   for (const st::ParameterSpec& spec : st::parameterTable()) {
-    if (spec.live) EXPECT_EQ(in_force.at(spec.name), spec.get(expected)) << spec.name;
+    if (spec.live) {
+      EXPECT_EQ(in_force.at(spec.name), spec.get(expected)) << spec.name;
+    }
   }
 }
 

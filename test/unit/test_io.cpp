@@ -1,7 +1,13 @@
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cstdio>
 #include <fstream>
+#include <iostream>
+#include <iterator>
 
 #include "sdf_tracker/core/io.h"
 #include "sdf_tracker/core/surface.h"
@@ -84,7 +90,7 @@ TEST(Io, CorruptPlyIsRejectedWithTheFileName) {
     FAIL();
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("bad.ply"), std::string::npos);
-    EXPECT_NE(std::string(e.what()).find("vertex"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("10 vertices"), std::string::npos) << e.what();
   }
 }
 
@@ -185,6 +191,105 @@ TEST(TumSequence, ReadsIntrinsicsFileOrFallsBackToFreiburg1) {
   // The 320x240 frames do not match the 640x480 default intrinsics: a clear error, not garbage.
   EXPECT_THROW(defaults.depth(0), std::runtime_error);
   EXPECT_THROW(TumSequence::open(dir + "/missing"), std::runtime_error);
+}
+
+/// Runs `fn` in a child process whose address space is capped at `megabytes` more than now:
+/// an allocation the size of a header's claim fails there. True when fn returned true.
+template <typename Fn>
+bool withinMemory(size_t megabytes, Fn&& fn) {
+  const pid_t child = fork();
+  if (child == 0) {
+    std::ifstream status("/proc/self/statm");
+    size_t pages = 0;
+    status >> pages;
+    const rlim_t limit = static_cast<rlim_t>(pages) * sysconf(_SC_PAGESIZE) + (megabytes << 20);
+    const rlimit cap{limit, limit};
+    setrlimit(RLIMIT_AS, &cap);
+    _exit(fn() ? 0 : 1);
+  }
+  int status = 0;
+  waitpid(child, &status, 0);
+  return WIFEXITED(status) && WEXITSTATUS(status) == 0;
+}
+
+/// A PNG signature and IHDR chunk with the given size and format, and nothing after it.
+std::string pngHeader(uint32_t width, uint32_t height, uint8_t bit_depth, uint8_t colour_type) {
+  std::string bytes("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR", 16);
+  for (uint32_t value : {width, height}) {
+    for (int shift = 24; shift >= 0; shift -= 8) bytes += static_cast<char>((value >> shift) & 0xff);
+  }
+  bytes += static_cast<char>(bit_depth);
+  bytes += static_cast<char>(colour_type);
+  bytes += std::string("\0\0\0\0\0\0\0", 7);  // compression, filter, interlace, CRC
+  return bytes;
+}
+
+TEST(Io, AShortVtiClaimingAHugeGridIsRefusedBeforeAnythingIsAllocated) {
+  const std::string dir = test::scratchDirectory("vti_bomb");
+  io::writeVti(dir + "/small.vti", sphereVolume());
+  std::ifstream in(dir + "/small.vti", std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const char* extent : {"0 511 0 511 0 511", "0 4095 0 4095 0 127"}) {
+    std::string bomb = text;
+    for (size_t at = 0; (at = bomb.find("0 39 0 39 0 39", at)) != std::string::npos;) bomb.replace(at, 14, extent);
+    bomb.resize(bomb.find("_", bomb.find("<AppendedData")) + 200);  // about 1.5 KB in all
+    writeFile(dir + "/bomb.vti", bomb);
+    EXPECT_TRUE(withinMemory(64, [&] {
+      try {
+        io::readVti(dir + "/bomb.vti");
+      } catch (const std::runtime_error& e) {
+        if (std::string(e.what()).find("truncated") != std::string::npos) return true;
+        std::cerr << e.what() << "\n";
+      }
+      return false;
+    })) << extent;
+  }
+  std::string wild = text;
+  wild.replace(wild.find("0 39 0 39 0 39"), 14, "0 2147483647 -2147483648 0 0 39");
+  writeFile(dir + "/wild.vti", wild);
+  EXPECT_THROW(io::readVti(dir + "/wild.vti"), std::runtime_error) << "extents that overflow int";
+}
+
+TEST(Io, DepthPngsAreCheckedFromTheirHeaderBeforeDecoding) {
+  const std::string dir = test::scratchDirectory("png_header");
+  auto errorOf = [](const std::string& path, int width, int height) {
+    try {
+      io::readDepthPng(path, 5000.0, width, height);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  writeFile(dir + "/huge.png", pngHeader(20000, 20000, 16, 0));  // would take 2.5 GB to decode
+  EXPECT_NE(errorOf(dir + "/huge.png", 640, 480).find("image is 20000x20000 but the intrinsics are for 640x480"),
+            std::string::npos);
+  EXPECT_TRUE(withinMemory(64, [&] { return !errorOf(dir + "/huge.png", 0, 0).empty(); })) << "no size given";
+  writeFile(dir + "/rgb16.png", pngHeader(640, 480, 16, 2));
+  EXPECT_NE(errorOf(dir + "/rgb16.png", 640, 480).find("16-bit greyscale PNG (got 16-bit RGB)"), std::string::npos);
+  writeFile(dir + "/grey_alpha.png", pngHeader(640, 480, 16, 4));
+  EXPECT_NE(errorOf(dir + "/grey_alpha.png", 640, 480).find("got 16-bit greyscale + alpha"), std::string::npos);
+  writeFile(dir + "/grey8.png", pngHeader(640, 480, 8, 0));
+  EXPECT_NE(errorOf(dir + "/grey8.png", 640, 480).find("got 8-bit greyscale"), std::string::npos);
+  writeFile(dir + "/text.png", "not a png at all, but long enough to hold a header");
+  EXPECT_NE(errorOf(dir + "/text.png", 640, 480).find("not a PNG file"), std::string::npos);
+}
+
+TEST(Io, APlyHeaderClaimingMoreThanItsFileHoldsIsRefused) {
+  const std::string dir = test::scratchDirectory("ply_bomb");
+  writeFile(dir + "/bomb.ply",
+            "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\nproperty float y\n"
+            "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0000");
+  EXPECT_TRUE(withinMemory(64, [&] {
+    try {
+      io::readPlyMesh(dir + "/bomb.ply");
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what()).find("more than its") != std::string::npos;
+    }
+    return false;
+  }));
+  writeFile(dir + "/negative.ply", "ply\nformat ascii 1.0\nelement vertex -3\nproperty float x\nproperty float y\n"
+                                   "property float z\nend_header\n");
+  EXPECT_THROW(io::readPlyMesh(dir + "/negative.ply"), std::runtime_error);
 }
 
 }  // namespace

@@ -30,6 +30,9 @@ struct NodeOptions {
   double cloud_rate_hz = 1.0;
   double mesh_rate_hz = 0.2;
   int path_length = 10000;  ///< poses kept in ~path; older ones stay in the trajectory file
+  /// A frame stamped this much [s] before the last one restarts the map (a bag played again);
+  /// 0: never. Frames that go back less, or with 0, are dropped and counted.
+  double time_jump_reset_s = 0.0;
   std::string trajectory_file;
   std::string mesh_file;   ///< PLY mesh written at shut-down
   std::string cloud_file;  ///< PLY surface cloud written at shut-down

@@ -1,0 +1,158 @@
+// The command-line tools' contract with their user: exit codes, refused options, valid JSON, and
+// an output folder that never holds half-written or mixed results.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "../../src/tools/command_line.h"
+#include "../../src/tools/output_folder.h"
+#include "../../src/tools/report.h"
+#include "sdf_tracker/core/io.h"
+#include "sdf_tracker/core/synthetic.h"
+#include "test_helpers.h"
+
+namespace sdf_tracker::tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ToolRun {
+  int exit_code;
+  std::string output;  ///< stdout and stderr
+};
+
+/// Runs the offline runner with `arguments` (already quoted for the shell).
+ToolRun offline(const std::string& arguments) {
+  const std::string command = std::string(SDF_TRACKER_OFFLINE) + " --quiet " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  ToolRun run{-1, ""};
+  char buffer[4096];
+  while (pipe && fgets(buffer, sizeof(buffer), pipe)) run.output += buffer;
+  const int status = pipe ? pclose(pipe) : -1;
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return run;
+}
+
+/// A short synthetic QVGA sequence with ground truth.
+std::string shortSequence(int frames) {
+  const std::string dir = test::scratchDirectory("cli_sequence");
+  synthetic::SequenceSpec spec;
+  spec.frames = frames;
+  spec.camera = test::testCamera();
+  synthetic::writeSequence(dir, spec);
+  return dir;
+}
+
+TEST(Json, StringsAreEscapedAndNonFiniteNumbersAreNull) {
+  EXPECT_EQ(jsonString("a\tb\"c\\d\n"), "\"a\\u0009b\\\"c\\\\d\\u000a\"");
+  EXPECT_EQ(jsonNumber(0.25), "0.25");
+  EXPECT_EQ(jsonNumber(std::numeric_limits<double>::infinity()), "null");
+  EXPECT_EQ(jsonNumber(std::nan("")), "null");
+}
+
+TEST(CommandLine, WholeNumbersBeyondIntAreRefused) {
+  const char* argv[] = {"tool", "--frames", "1e10"};
+  const CommandLine args(3, const_cast<char**>(argv), {"frames"}, {});
+  EXPECT_THROW(args.getInt("frames", 0), std::invalid_argument);
+}
+
+TEST(OutputFolder, ResultsAppearOnlyOnCommitAndReplaceThePreviousRunsWhole) {
+  const std::string dir = test::scratchDirectory("output_folder");
+  {
+    OutputFolder first(dir, {"a.txt", "b.txt", "summary.txt"});
+    io::writeTextFile(first.path("a.txt"), "first a");
+    io::writeTextFile(first.path("b.txt"), "first b");
+    io::writeTextFile(first.path("summary.txt"), "first summary");
+    EXPECT_FALSE(fs::exists(dir + "/a.txt")) << "nothing in place before commit";
+    first.commit({"summary.txt"});
+  }
+  {
+    // A run killed (or failing) before it commits leaves the previous results as they were.
+    OutputFolder failing(dir, {"a.txt", "b.txt", "summary.txt"});
+    io::writeTextFile(failing.path("a.txt"), "half-done");
+  }
+  std::ifstream a(dir + "/a.txt");
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(a), {}), "first a");
+  {
+    OutputFolder second(dir, {"a.txt", "b.txt", "summary.txt"});
+    io::writeTextFile(second.path("a.txt"), "second a");
+    io::writeTextFile(second.path("summary.txt"), "second summary");
+    second.commit({"summary.txt"});
+  }
+  EXPECT_FALSE(fs::exists(dir + "/b.txt")) << "a result of the previous run that this one did not write";
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    EXPECT_TRUE(entry.path().filename() == "a.txt" || entry.path().filename() == "summary.txt") << entry.path();
+  }
+}
+
+TEST(OutputFolder, StagingFoldersOfKilledRunsAreRemovedAtTheNextStart) {
+  const std::string dir = test::scratchDirectory("output_stale");
+  const std::string stale = dir + "/.sdf_tracker_staging-2147483000";  // no such process
+  fs::create_directories(stale);
+  io::writeTextFile(stale + "/mesh.ply.tmp", std::string(1000, 'x'));
+  OutputFolder next(dir, {"mesh.ply"});
+  EXPECT_FALSE(fs::exists(stale));
+}
+
+TEST(Offline, AnEmptyOutputFolderIsRefusedAndNothingIsWritten) {
+  const std::string sequence = shortSequence(3);
+  const ToolRun run = offline("--sequence " + sequence + " --output ''");
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.output.find("--output must name a folder"), std::string::npos) << run.output;
+  EXPECT_FALSE(fs::exists("/trajectory.txt"));
+}
+
+TEST(Offline, AbsurdThreadCountsAreRefusedWithTheLimit) {
+  const ToolRun run = offline("--sequence " + shortSequence(3) + " --output " + test::scratchDirectory("o") +
+                          " --threads 100000");
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.output.find("--threads must be in [1, "), std::string::npos) << run.output;
+}
+
+TEST(Offline, NodeOnlyParametersAreRefusedNotIgnored) {
+  const ToolRun run = offline("--sequence " + shortSequence(3) + " --output " + test::scratchDirectory("o") +
+                          " --param FocalLengthX=-5 --param ImageWidth=123");
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.output.find("FocalLengthX: read by the ROS node only"), std::string::npos) << run.output;
+}
+
+TEST(Offline, TooFewFramesForAccuracyStillSucceedWithASummary) {
+  const std::string out = test::scratchDirectory("few");
+  const ToolRun run = offline("--sequence " + shortSequence(5) + " --output " + out + " --frames 2");
+  EXPECT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("accuracy not evaluated"), std::string::npos) << run.output;
+  EXPECT_TRUE(fs::exists(out + "/summary.json"));
+}
+
+TEST(Offline, ARunInWhichNoFrameCouldBeTrackedFails) {
+  // Every frame after the first holds no depth at all.
+  const std::string sequence = shortSequence(3);
+  const DepthImage empty(test::testCamera().width, test::testCamera().height, 0.0f);
+  std::ifstream list(sequence + "/depth.txt");
+  std::string line;
+  int frame = 0;
+  while (std::getline(list, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    if (frame++ > 0) io::writeDepthPng(sequence + "/" + line.substr(line.find(' ') + 1), empty, 5000.0);
+  }
+  const ToolRun run = offline("--sequence " + sequence + " --output " + test::scratchDirectory("none"));
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("no frame could be tracked"), std::string::npos) << run.output;
+}
+
+TEST(Offline, TheJsonSummaryIsValidJsonEvenForAPathWithATab) {
+  const std::string sequence = shortSequence(3);
+  const std::string tabbed = sequence + "\tfolder";
+  fs::rename(sequence, tabbed);
+  const std::string out = test::scratchDirectory("json");
+  const ToolRun run = offline("--sequence '" + tabbed + "' --output " + out);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_EQ(std::system(("/usr/bin/python3 -m json.tool " + out + "/summary.json > /dev/null").c_str()), 0);
+}
+
+}  // namespace
+}  // namespace sdf_tracker::tools
