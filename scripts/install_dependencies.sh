@@ -8,7 +8,7 @@ packages=(
   libeigen3-dev libopencv-dev libgtest-dev
   libpcl-dev libpcl-conversions-dev libtf2-ros-dev libtf2-eigen-dev libcv-bridge-dev libimage-transport-dev
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure python3-rostest librostest-dev
-  python3-rosbag libopenni2-dev libtf-dev libtopic-tools-dev rviz
+  python3-rosbag python3-rospy libopenni2-dev libtf-dev libtopic-tools-dev rviz
 )
 
 missing=()

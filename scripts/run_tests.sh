@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Every test: installs dependencies, builds with tests, runs the unit and end-to-end gtests (and
-# the rostests once there are some) through catkin, and prints one "N passed, N failed" line.
+# Every test: installs dependencies, builds with tests, runs the unit and end-to-end gtests and the
+# rostests through catkin, then the unit tests under ASan + UBSan and the readers' fuzz targets
+# (scripts/run_sanitizers.sh), and prints one "N passed, N failed" line.
 # Real-data tests read SDF_TRACKER_DATA (default ../shared/data) and skip visibly without it.
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -19,6 +20,8 @@ catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$
   > "$repo/build/run_tests.log" 2>&1 || true
 catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j1 run_tests \
   >> "$repo/build/run_tests.log" 2>&1 || true
+# The core's unit tests once more under ASan + UBSan, and every reader's fuzz target (no ROS).
+RESULTS_DIR="$repo/build/ws/build/test_results/sanitize" bash "$repo/scripts/run_sanitizers.sh" || true
 # What the tests printed about themselves: figures, skips, failures.
 grep -E "^\[ (figures|  SKIPPED|  FAILED) *\]|SKIPPED:|Failure|\.cpp:[0-9]+:" "$repo/build/run_tests.log" | sort -u || true
 # Count from the result files, so a crashed test binary counts as a failure too.

@@ -22,11 +22,13 @@ namespace {
   throw std::runtime_error(path + ": " + what);
 }
 
+std::string temporaryPathFor(const std::string& path) { return path + ".tmp"; }
+
 /// An output file that appears under its final name only when commit() succeeds.
 class AtomicOutput {
  public:
   explicit AtomicOutput(const std::string& path)
-      : path_(path), temporary_(path + ".tmp"), out_(temporary_, std::ios::binary | std::ios::trunc) {
+      : path_(path), temporary_(temporaryPathFor(path)), out_(temporary_, std::ios::binary | std::ios::trunc) {
     if (!out_) fail(path_, std::string("cannot open for writing: ") + std::strerror(errno));
   }
   ~AtomicOutput() {
@@ -454,6 +456,10 @@ void makeDirectories(const std::string& path) {
       fail(partial, std::string("cannot create directory: ") + std::strerror(errno));
     }
   }
+}
+
+bool removeStaleTemporary(const std::string& path) {
+  return std::remove(temporaryPathFor(path).c_str()) == 0;
 }
 
 void writeTextFile(const std::string& path, const std::string& text) {

@@ -12,6 +12,13 @@ MapServices::MapServices(ros::NodeHandle pnh, TrackerState& state, const NodeOpt
   save_mesh_srv_ = pnh.advertiseService("save_mesh", &MapServices::saveMesh, this);
   save_volume_srv_ = pnh.advertiseService("save_volume", &MapServices::saveVolume, this);
   load_volume_srv_ = pnh.advertiseService("load_volume", &MapServices::loadVolume, this);
+  // A node killed while writing leaves temporaries beside its files: remove them now.
+  for (const std::string& path : {options_.trajectory_file, options_.mesh_file, options_.cloud_file,
+                                  outputPath("", "triangles.obj"), outputPath("", "sdf_volume.vti")}) {
+    if (!path.empty() && st::io::removeStaleTemporary(path)) {
+      ROS_INFO("sdf_tracker: removed the unfinished %s.tmp of a run that was stopped while writing", path.c_str());
+    }
+  }
 }
 
 std::string MapServices::outputPath(const std::string& requested, const std::string& default_name) const {

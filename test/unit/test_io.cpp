@@ -224,6 +224,16 @@ std::string pngHeader(uint32_t width, uint32_t height, uint8_t bit_depth, uint8_
   return bytes;
 }
 
+TEST(Io, TheTemporaryOfAKilledWriterIsFoundAndRemoved) {
+  const std::string dir = test::scratchDirectory("stale_tmp");
+  io::writeTextFile(dir + "/trajectory.txt", "finished");
+  writeFile(dir + "/trajectory.txt.tmp", "a writer was killed here");  // as AtomicOutput names it
+  EXPECT_TRUE(io::removeStaleTemporary(dir + "/trajectory.txt"));
+  EXPECT_FALSE(std::ifstream(dir + "/trajectory.txt.tmp").good());
+  EXPECT_TRUE(std::ifstream(dir + "/trajectory.txt").good()) << "the finished file stays";
+  EXPECT_FALSE(io::removeStaleTemporary(dir + "/trajectory.txt"));
+}
+
 TEST(Io, AShortVtiClaimingAHugeGridIsRefusedBeforeAnythingIsAllocated) {
   const std::string dir = test::scratchDirectory("vti_bomb");
   io::writeVti(dir + "/small.vti", sphereVolume());

@@ -66,4 +66,8 @@ void makeDirectories(const std::string& path);
 /// Writes text atomically (temporary file + rename).
 void writeTextFile(const std::string& path, const std::string& text);
 
+/// Removes the temporary file a writer of `path` left when its process was killed mid-write;
+/// true when there was one.
+bool removeStaleTemporary(const std::string& path);
+
 }  // namespace sdf_tracker::io

@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# The core's unit tests (test_core, test_tools) once under AddressSanitizer + UndefinedBehavior-
+# Sanitizer, then every reader's fuzz target for FUZZ_SECONDS (default 30) from its committed
+# corpus (test/fuzz/corpus/). Builds in build/sanitize (plain CMake, no ROS). Results go to
+# RESULTS_DIR (default build/sanitize/results) as JUnit XML, which run_tests.sh counts.
+#   scripts/run_sanitizers.sh
+set -euo pipefail
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="$repo/build/sanitize"
+results="${RESULTS_DIR:-$build/results}"
+seconds="${FUZZ_SECONDS:-30}"
+mkdir -p "$build" "$results"
+export PATH="/usr/bin:$PATH"
+# Any report is a failure; leaks are checked too.
+export ASAN_OPTIONS="abort_on_error=1:detect_leaks=1"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+
+junit() {  # junit NAME PASSED(0/1) MESSAGE
+  local failure=""
+  [ "$2" = 1 ] || failure="<failure message=\"$(printf '%s' "$3" | sed 's/&/\&amp;/g; s/</\&lt;/g; s/"/\&quot;/g')\"/>"
+  printf '<testsuite name="sanitize" tests="1"><testcase classname="sanitize" name="%s">%s</testcase></testsuite>\n' \
+    "$1" "$failure" > "$results/$1.xml"
+}
+
+if ! { cmake -S "$repo/test/sanitize" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo > "$build/cmake.log" 2>&1 &&
+       cmake --build "$build" -j"$(nproc)" > "$build/build.log" 2>&1; }; then
+  tail -n 30 "$build/build.log" 2>/dev/null || tail -n 30 "$build/cmake.log"
+  junit sanitizer_build 0 "the sanitizer build failed (build/sanitize/build.log)"
+  exit 1
+fi
+status=0
+for test in test_core test_tools; do
+  echo "sanitizers: $test under ASan + UBSan"
+  if ! "$build/$test" --gtest_output="xml:$results/$test.xml" > "$build/$test.log" 2>&1; then
+    grep -E "ERROR: (Address|Leak)Sanitizer|runtime error|FAILED" "$build/$test.log" | head -n 20
+    # A sanitizer abort leaves no XML: count it.
+    grep -q "<testsuites" "$results/$test.xml" 2>/dev/null || junit "$test" 0 "aborted: see build/sanitize/$test.log"
+    status=1
+  fi
+done
+for target in depth_png vti ply tum_folder; do
+  echo "sanitizers: fuzzing $target for $seconds s"
+  if "$build/fuzz_$target" "$repo/test/fuzz/corpus/$target" "$seconds" 1 > "$build/fuzz_$target.log" 2>&1; then
+    tail -n 1 "$build/fuzz_$target.log"
+    junit "fuzz_$target" 1 ""
+  else
+    grep -E "ERROR: (Address|Leak)Sanitizer|runtime error|SUMMARY" "$build/fuzz_$target.log" | head -n 20
+    junit "fuzz_$target" 0 "fuzz_$target crashed or a sanitizer reported (build/sanitize/fuzz_$target.log)"
+    status=1
+  fi
+done
+exit $status
