@@ -52,7 +52,8 @@ class PoseBroadcaster {
   void clearPath();
 
  private:
-  /// The parent this node would give `child`; empty when publishing is safe or already refused.
+  /// False when `child` already has a parent other than `parent` from another publisher (said
+  /// once, then remembered): this node must not publish parent -> child.
   bool mayPublishParentOf(const std::string& child, const std::string& parent);
   void onImu(const sensor_msgs::ImuConstPtr& imu);
 
