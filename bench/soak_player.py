@@ -6,6 +6,7 @@ milliseconds per frame (tracking + fusion from ~status) over those frames.
   soak_player.py BAG FRAMES NODE_PID [REPORT]"""
 import sys
 import threading
+import time
 
 import rosbag
 import rospy
@@ -47,9 +48,13 @@ def main():
     image_pub = rospy.Publisher("camera/depth/image", Image, queue_size=2)
     info_pub = rospy.Publisher("camera/depth/camera_info", CameraInfo, queue_size=2)
     status_sub = rospy.Subscriber("sdf_tracker/status", TrackingStatus, on_status, queue_size=10)
+    deadline = time.monotonic() + 60.0
     while (image_pub.get_num_connections() == 0 or info_pub.get_num_connections() == 0
            or status_sub.get_num_connections() == 0):
-        rospy.sleep(0.1)
+        if rospy.is_shutdown() or time.monotonic() > deadline:
+            print("the node did not connect within 60 s (is it running as sdf_tracker?)", flush=True)
+            sys.exit(1)
+        time.sleep(0.1)
     rospy.sleep(1.0)
     print("frames  resident_MB  ms_per_frame  failed", flush=True)
     for n in range(total):
