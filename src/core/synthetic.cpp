@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -94,6 +95,8 @@ Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& targ
 }
 
 }  // namespace
+
+constexpr double kGravity_m_s2 = 9.81;
 
 Scene Scene::indoorRoom() {
   // World: y points down (as the first camera's image), floor at y = 1.3 m.
@@ -237,6 +240,18 @@ void writeSequence(const std::string& directory, const SequenceSpec& spec) {
     poses.push_back({t, T_W_C});
   }
   io::writeTrajectory(directory + "/groundtruth.txt", poses);
+  // What a resting accelerometer fixed to the depth camera reads (gravity's reaction, up: -y in
+  // this world), at 100 Hz from half a second before the first frame, in the camera's frame.
+  std::ostringstream accelerometer;
+  accelerometer << "# accelerometer (m/s^2) in the depth camera's optical frame, gravity only\n"
+                << "# timestamp ax ay az\n" << std::fixed;
+  const Eigen::Vector3d up_W(0.0, -kGravity_m_s2, 0.0);
+  for (double t = -0.5; t <= duration; t += 0.01) {
+    const Eigen::Vector3d a_C = cameraPose(spec.motion, t, duration).linear().transpose() * up_W;
+    accelerometer << std::setprecision(6) << t << ' ' << std::setprecision(5) << a_C.x() << ' ' << a_C.y() << ' '
+                  << a_C.z() << '\n';
+  }
+  io::writeTextFile(directory + "/accelerometer.txt", accelerometer.str());
   intrinsics << "# fx fy cx cy width height depth_factor\n"
              << spec.camera.fx << ' ' << spec.camera.fy << ' ' << spec.camera.cx << ' ' << spec.camera.cy << ' '
              << spec.camera.width << ' ' << spec.camera.height << ' ' << spec.depth_factor << '\n';

@@ -10,6 +10,8 @@ namespace sdf_tracker_ros {
 
 namespace {
 constexpr double kThrottle_s = 5.0;
+/// Accelerometer readings this long before the first frame level the map frame.
+constexpr double kLevellingWindow_s = 0.2;
 }  // namespace
 
 Eigen::Isometry3d mapFromOpticalWorld() {
@@ -60,8 +62,10 @@ void PoseBroadcaster::onImu(const sensor_msgs::ImuConstPtr& imu) {
   const auto& a = imu->linear_acceleration;
   const Eigen::Vector3d accel(a.x, a.y, a.z);
   if (!accel.allFinite()) return;
-  accel_sum_ += accel;
-  ++accel_count_;
+  accelerations_.emplace_back(imu->header.stamp, accel);
+  while (accelerations_.front().first.toSec() < imu->header.stamp.toSec() - kLevellingWindow_s) {
+    accelerations_.pop_front();
+  }
   imu_frame_ = stripSlash(imu->header.frame_id);
 }
 
@@ -92,7 +96,7 @@ Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::st
   const std::string camera_frame = frames_.camera_frame.empty() ? stripSlash(image_frame) : frames_.camera_frame;
   std::unique_lock<std::mutex> lock(mutex_);
   if (!map_frame_fixed_) {
-    if (imu_sub_ && accel_count_ == 0) {
+    if (imu_sub_ && accelerations_.empty()) {
       ROS_WARN("sdf_tracker: no message on %s before the first frame: the map frame is not levelled",
                imu_sub_.getTopic().c_str());
     } else if (imu_sub_) {
@@ -100,9 +104,13 @@ Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::st
         const Eigen::Isometry3d T_C_I =
             tf2::transformToEigen(tf_buffer_.lookupTransform(camera_frame, imu_frame_, ros::Time(0)));
         // At the first frame the tracker's world is the camera's optical frame (T_W_C = I).
-        const Eigen::Vector3d up_W = T_W_C.linear() * T_C_I.linear() * (accel_sum_ / accel_count_);
+        Eigen::Vector3d mean_I = Eigen::Vector3d::Zero();
+        for (const auto& sample : accelerations_) mean_I += sample.second;
+        mean_I /= static_cast<double>(accelerations_.size());
+        const Eigen::Vector3d up_W = T_W_C.linear() * T_C_I.linear() * mean_I;
         T_map_W_ = gravityAlignedMapFromOpticalWorld(up_W);
-        ROS_INFO("sdf_tracker: map frame levelled with %d IMU samples", accel_count_);
+        ROS_INFO("sdf_tracker: map frame levelled with the %zu IMU samples of the last %.1f s", accelerations_.size(),
+                 kLevellingWindow_s);
       } catch (const std::exception& e) {
         ROS_WARN("sdf_tracker: cannot level the map frame: no tf from the IMU's frame '%s' to the camera frame "
                  "'%s' (%s); the map frame is the first camera pose in REP 103 axes",

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <iostream>
 #include <map>
 #include <mutex>
 #include <set>
@@ -12,6 +14,7 @@
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
 #include <tf2_msgs/TFMessage.h>
+#include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
@@ -31,6 +34,8 @@ constexpr double kMinProcessedFraction = 0.95;
 constexpr double kMaxAteDifference_m = 0.005;
 /// Playback has ended when simulated time has not moved for this long.
 constexpr double kQuietAfterPlayback_s = 4.0;
+/// The map frame is levelled with the accelerometer: what is left is the first frame's pose error.
+constexpr double kMaxTilt_deg = 1.0;
 
 class TumBagTest : public ::testing::Test {
  public:
@@ -99,6 +104,13 @@ TEST_F(TumBagTest, PlaysAtRateOneWithOneParentPerFrameAndOfflineAccuracy) {
   EXPECT_EQ(parents_["kinect_gt"], std::set<std::string>{"world_gt"}) << "the ground truth, renamed";
   EXPECT_EQ(parents_["world_gt"], std::set<std::string>{"map"}) << "the ground truth, aligned to the map";
   EXPECT_TRUE(tf_buffer.canTransform("map", "openni_depth_optical_frame_gt", ros::Time(0)));
+  // The bag's /imu levels the map frame: the synthetic world's up (-y) is the map's +z.
+  const Eigen::Isometry3d T_map_world =
+      tf2::transformToEigen(tf_buffer.lookupTransform("map", "world_gt", ros::Time(0)));
+  const Eigen::Vector3d up_map = T_map_world.linear() * -Eigen::Vector3d::UnitY();
+  const double tilt_deg = std::acos(std::min(1.0, up_map.z())) * 180.0 / M_PI;
+  std::cout << "[ figures  ] map frame tilted " << tilt_deg << " degrees from level\n";
+  EXPECT_LT(tilt_deg, kMaxTilt_deg) << "the map frame is not levelled by /imu";
 
   const double processed = static_cast<double>(poses_.size()) / sequence.size();
   // Offline, the same frames (the node's stamps are the sequence's, shifted as tum_to_bag says).

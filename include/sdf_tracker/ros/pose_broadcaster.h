@@ -72,8 +72,9 @@ class PoseBroadcaster {
   std::deque<geometry_msgs::PoseStamped> path_poses_;
 
   ros::Subscriber imu_sub_;
-  Eigen::Vector3d accel_sum_ = Eigen::Vector3d::Zero();  ///< in the IMU's frame
-  int accel_count_ = 0;
+  /// The latest accelerometer readings (IMU frame), over kLevellingWindow_s: a hand-held camera
+  /// moves, so only the readings just before the first frame say where up was then.
+  std::deque<std::pair<ros::Time, Eigen::Vector3d>> accelerations_;
   std::string imu_frame_;
 };
 
