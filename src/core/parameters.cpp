@@ -150,7 +150,7 @@ ParameterValue ParameterSpec::checkValue(const ParameterValue& value) const {
     for (const auto& c : choices) list += (list.empty() ? "" : " or ") + c;
     throw std::invalid_argument(name + ": expected " + list + ", got \"" + std::get<std::string>(typed) + "\"");
   }
-  if (name == "TrackingSchedule") parseSchedule(std::get<std::string>(typed));  // throws with the rule
+  if (check_text) check_text(std::get<std::string>(typed));
   return typed;
 }
 
@@ -189,8 +189,8 @@ ParameterSpec bound(std::string name, std::string unit, std::string description,
   else if constexpr (std::is_integral_v<T>) type = ParameterType::kInt;
   else type = ParameterType::kDouble;
   using Stored = std::conditional_t<std::is_same_v<T, bool>, bool, std::conditional_t<std::is_integral_v<T>, int, double>>;
-  return ParameterSpec{std::move(name), type, std::move(unit), std::move(description), range, {}, std::move(defaults),
-                       live, readers,
+  return ParameterSpec{std::move(name), type, std::move(unit), std::move(description), range, {}, nullptr,
+                       std::move(defaults), live, readers,
                        [field](Settings& s, const ParameterValue& v) { field(s) = static_cast<T>(std::get<Stored>(v)); },
                        [field](const Settings& s) { return ParameterValue(static_cast<Stored>(field(s))); }};
 }
@@ -244,7 +244,8 @@ std::vector<ParameterSpec> buildTable() {
   // This package's own parameters.
   t.push_back(ParameterSpec{
       "TrackingSchedule", ParameterType::kText, "", "coarse-to-fine levels, stride x iterations, e.g. 4x12,2x6,1x2",
-      std::nullopt, {}, {std::string("4x12,2x8"), std::string("4x12,2x6,1x2"), std::string("4x12,2x8,1x2")},
+      std::nullopt, {}, [](const std::string& text) { parseSchedule(text); },
+      {std::string("4x12,2x8"), std::string("4x12,2x6,1x2"), std::string("4x12,2x8,1x2")},
       kLive, kAll, [](S& s, const ParameterValue& v) { s.pipeline.tracker.levels = parseSchedule(std::get<std::string>(v)); },
       [](const S& s) { return ParameterValue(formatSchedule(s.pipeline.tracker.levels)); }});
   t.push_back(bound<double>("MinDepth", "m", "nearer depth is no measurement", closed(0.0, 100.0), same(0.4), kLive,
@@ -254,7 +255,7 @@ std::vector<ParameterSpec> buildTable() {
   t.push_back(ParameterSpec{
       "DepthWeighting", ParameterType::kText, "",
       "fusion weights: constant (rolling average) or sensor (inverse depth-noise variance)", std::nullopt,
-      {"constant", "sensor"}, {std::string("sensor"), std::string("constant"), std::string("constant")}, kLive, kAll,
+      {"constant", "sensor"}, nullptr, {std::string("sensor"), std::string("constant"), std::string("constant")}, kLive, kAll,
       [](S& s, const ParameterValue& v) {
         s.pipeline.integrator.weighting =
             std::get<std::string>(v) == "sensor" ? MeasurementWeighting::kSensorNoise : MeasurementWeighting::kConstant;

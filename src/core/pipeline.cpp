@@ -87,10 +87,8 @@ void SdfPipeline::setVolume(TsdfVolume volume) {
 
 void SdfPipeline::updateConfig(const PipelineConfig& candidate) {
   throwIfInvalid("pipeline config", candidate.validate());
-  const VolumeConfig& a = candidate.volume;
-  const VolumeConfig& b = config_.volume;
-  if (a.dims != b.dims || a.voxel_size_m != b.voxel_size_m || a.positive_truncation_m != b.positive_truncation_m ||
-      a.compact_voxels != b.compact_voxels || candidate.initial_camera_in_grid != config_.initial_camera_in_grid) {
+  if (!candidate.volume.sameLattice(config_.volume) ||
+      candidate.initial_camera_in_grid != config_.initial_camera_in_grid) {
     throw std::invalid_argument(
         "the grid (size, cell size, positive truncation, voxel storage, placement) cannot change live");
   }

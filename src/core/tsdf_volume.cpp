@@ -52,10 +52,7 @@ void TsdfVolume::clear() {
 }
 
 void TsdfVolume::copySlabsFrom(const TsdfVolume& source, int k_begin, int k_end) {
-  const VolumeConfig& a = config_;
-  const VolumeConfig& b = source.config_;
-  if (a.dims != b.dims || a.voxel_size_m != b.voxel_size_m || a.origin_W != b.origin_W ||
-      a.positive_truncation_m != b.positive_truncation_m || a.compact_voxels != b.compact_voxels) {
+  if (!config_.sameGrid(source.config_)) {
     throw std::invalid_argument("copySlabsFrom: the volumes differ in geometry or storage");
   }
   k_begin = std::max(0, k_begin);

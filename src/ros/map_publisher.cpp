@@ -22,12 +22,6 @@ namespace {
 /// Niceness of the extraction thread: it runs on what the tracker leaves of the CPU.
 constexpr int kBackgroundNice = 10;
 
-bool sameGrid(const st::TsdfVolume& a, const st::TsdfVolume& b) {
-  const st::VolumeConfig &x = a.config(), &y = b.config();
-  return x.dims == y.dims && x.voxel_size_m == y.voxel_size_m && x.origin_W == y.origin_W &&
-         x.positive_truncation_m == y.positive_truncation_m && x.compact_voxels == y.compact_voxels;
-}
-
 }  // namespace
 
 MapSnapshot::MapSnapshot(std::mutex& map_mutex, std::function<const st::TsdfVolume*()> live)
@@ -38,7 +32,7 @@ const st::TsdfVolume* MapSnapshot::update(int slabs_per_lock) {
     std::lock_guard<std::mutex> lock(map_mutex_);
     const st::TsdfVolume* live = live_();
     if (!live) return nullptr;
-    if (!copy_ || !sameGrid(*copy_, *live)) {  // first use, or a map of another grid was loaded
+    if (!copy_ || !copy_->config().sameGrid(live->config())) {  // first use, or a map of another grid was loaded
       copy_ = std::make_unique<st::TsdfVolume>(*live);
       return copy_.get();
     }

@@ -75,6 +75,8 @@ struct ParameterSpec {
   std::string description;
   std::optional<Range> range;        ///< numbers: the accepted values
   std::vector<std::string> choices;  ///< text with a fixed set of values (empty: free text)
+  /// Free text's own rule: throws std::invalid_argument saying what is expected (may be empty).
+  std::function<void(const std::string&)> check_text;
   PresetDefaults defaults;
   bool live;  ///< may change while running (dynamic reconfigure)
   Readers readers;

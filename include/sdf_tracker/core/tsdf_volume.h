@@ -66,6 +66,13 @@ struct VolumeConfig {
 
   std::vector<std::string> validate() const;
   Eigen::Vector3d extent_m() const { return dims.cast<double>() * voxel_size_m; }
+  /// Same lattice and storage (dims, voxel size, positive truncation, voxel format), wherever placed.
+  bool sameLattice(const VolumeConfig& other) const {
+    return dims == other.dims && voxel_size_m == other.voxel_size_m &&
+           positive_truncation_m == other.positive_truncation_m && compact_voxels == other.compact_voxels;
+  }
+  /// The same lattice at the same place: voxel i of one is voxel i of the other.
+  bool sameGrid(const VolumeConfig& other) const { return sameLattice(other) && origin_W == other.origin_W; }
 };
 
 /// Result of sampling the field at a continuous point.
