@@ -41,6 +41,20 @@ foreach(tool sdf_tracker_offline sdf_tracker_synth sdf_tracker_evaluate)
   target_link_libraries(${tool} sdf_tracker_tools)
 endforeach()
 
+# Depth cameras' own formats, without ROS or the vendors' libraries: the Kinect v1's disparity
+# model, fakenect recordings and OpenNI .oni files; and the converters from TUM folders to them.
+add_library(sdf_tracker_devices
+  ${SDF_TRACKER_ROOT}/src/devices/fakenect_dump.cpp
+  ${SDF_TRACKER_ROOT}/src/devices/kinect_disparity.cpp
+  ${SDF_TRACKER_ROOT}/src/devices/oni_file.cpp
+  ${SDF_TRACKER_ROOT}/src/devices/recording.cpp
+)
+target_link_libraries(sdf_tracker_devices PUBLIC sdf_tracker_core)
+foreach(tool tum_to_fakenect tum_to_oni)
+  add_executable(${tool} ${SDF_TRACKER_TOOLS_DIR}/${tool}.cpp)
+  target_link_libraries(${tool} sdf_tracker_tools sdf_tracker_devices)
+endforeach()
+
 set(SDF_TRACKER_UNIT_TEST_DIR ${SDF_TRACKER_ROOT}/test/unit)
 set(SDF_TRACKER_CORE_TEST_SOURCES
   ${SDF_TRACKER_UNIT_TEST_DIR}/test_main.cpp
@@ -53,4 +67,5 @@ set(SDF_TRACKER_CORE_TEST_SOURCES
   ${SDF_TRACKER_UNIT_TEST_DIR}/test_pipeline.cpp
   ${SDF_TRACKER_UNIT_TEST_DIR}/test_raycaster.cpp
 )
-set(SDF_TRACKER_TOOLS_TEST_SOURCES ${SDF_TRACKER_UNIT_TEST_DIR}/test_main.cpp ${SDF_TRACKER_UNIT_TEST_DIR}/test_tools.cpp)
+set(SDF_TRACKER_TOOLS_TEST_SOURCES ${SDF_TRACKER_UNIT_TEST_DIR}/test_main.cpp ${SDF_TRACKER_UNIT_TEST_DIR}/test_tools.cpp
+  ${SDF_TRACKER_UNIT_TEST_DIR}/test_devices.cpp)

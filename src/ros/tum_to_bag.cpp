@@ -30,6 +30,7 @@
 #include "../tools/command_line.h"
 #include "sdf_tracker/core/parameters.h"
 #include "sdf_tracker/core/tum_sequence.h"
+#include "sdf_tracker/devices/recording.h"
 #include "sdf_tracker/ros/conversions.h"
 
 namespace {
@@ -139,37 +140,22 @@ sensor_msgs::Image readColourImage(const std::string& path, const std_msgs::Head
 }
 
 int run(int argc, char** argv) {
-  std::vector<std::string> positional;
-  std::vector<char*> options{argv[0]};
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg.rfind("--", 0) == 0) {
-      options.push_back(argv[i]);
-      if (i + 1 < argc) options.push_back(argv[++i]);
-    } else {
-      positional.push_back(arg);
-    }
+  const st::tools::CommandLine args(argc, argv, {"frames"}, {"help"}, {"SEQUENCE_DIR", "OUT.bag"});
+  if (args.has("help")) {
+    std::cout << kUsage << "\n";
+    return 0;
   }
-  if (positional.size() != 2) throw std::invalid_argument(std::string("expected SEQUENCE_DIR and OUT.bag\n") + kUsage);
-  const st::tools::CommandLine args(static_cast<int>(options.size()), options.data(), {"frames"}, {});
-  st::TumSequence sequence = st::TumSequence::open(positional[0]);
-  if (args.has("frames")) {
-    const int frames = st::parseInteger("--frames", args.get("frames"));
-    if (frames < 1) throw std::invalid_argument("--frames must be at least 1 (got " + args.get("frames") + ")");
-    sequence.truncate(static_cast<size_t>(frames));
-  }
-  if (sequence.size() == 0) throw std::runtime_error(positional[0] + "/depth.txt lists no frame");
-  const std::string out = positional[1];
+  const st::TumSequence sequence = st::tools::openSequence(args);
+  const std::string out = args.positional(1);
   const std::string temporary = out + ".partial";
 
-  // ros::Time(0) means "no time" to tf: sequences that start at 0 s are shifted by this much.
-  const double offset_s = sequence.timestamp(0) < 1.0 ? 1.0 : 0.0;
+  const double offset_s = st::devices::rosStampOffset(sequence);
   const double t_end = sequence.timestamp(sequence.size() - 1);
   const std::vector<Link> chain = openniChain();
   const Eigen::Isometry3d T_depth_kinect = kinectFromDepthOptical(chain).inverse();
   const auto& gt = sequence.groundTruth();
-  const auto colour = readTimedLines(positional[0] + "/rgb.txt");
-  const auto accelerometer = readTimedLines(positional[0] + "/accelerometer.txt");
+  const auto colour = readTimedLines(args.positional(0) + "/rgb.txt");
+  const auto accelerometer = readTimedLines(args.positional(0) + "/accelerometer.txt");
 
   try {
     rosbag::Bag bag(temporary, rosbag::bagmode::Write);
@@ -200,7 +186,7 @@ int run(int argc, char** argv) {
         imu.orientation_covariance[0] = -1.0;  // no orientation
         imu.angular_velocity_covariance[0] = -1.0;
         if (!(fields >> imu.linear_acceleration.x >> imu.linear_acceleration.y >> imu.linear_acceleration.z)) {
-          throw std::runtime_error(positional[0] + "/accelerometer.txt: expected \"timestamp ax ay az\"");
+          throw std::runtime_error(args.positional(0) + "/accelerometer.txt: expected \"timestamp ax ay az\"");
         }
         bag.write("/imu", imu.header.stamp, imu);
         ++accel_index;
@@ -210,7 +196,7 @@ int run(int argc, char** argv) {
         header.seq = static_cast<uint32_t>(colour_index);
         header.stamp = stamp(colour[colour_index].first);
         header.frame_id = "/openni_rgb_optical_frame";
-        const sensor_msgs::Image image = readColourImage(positional[0] + "/" + colour[colour_index].second, header);
+        const sensor_msgs::Image image = readColourImage(args.positional(0) + "/" + colour[colour_index].second, header);
         st::PinholeCamera camera = sequence.camera();
         camera.width = static_cast<int>(image.width), camera.height = static_cast<int>(image.height);
         bag.write("/camera/rgb/image_color", header.stamp, image);

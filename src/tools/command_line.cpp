@@ -7,16 +7,23 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "sdf_tracker/core/parameters.h"
+
 namespace sdf_tracker::tools {
 
 CommandLine::CommandLine(int argc, char** argv, const std::vector<std::string>& options_with_value,
-                         const std::vector<std::string>& flags) {
+                         const std::vector<std::string>& flags, const std::vector<std::string>& positional_names)
+    : positional_names_(positional_names) {
   auto contains = [](const std::vector<std::string>& list, const std::string& s) {
     return std::find(list.begin(), list.end(), s) != list.end();
   };
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg.rfind("--", 0) != 0) throw std::invalid_argument("unexpected argument \"" + arg + "\"");
+    if (arg.rfind("--", 0) != 0) {
+      if (positional_.size() >= positional_names_.size()) throw std::invalid_argument("unexpected argument \"" + arg + "\"");
+      positional_.push_back(arg);
+      continue;
+    }
     const std::string name = arg.substr(2);
     if (contains(flags, name)) {
       values_[name].push_back("true");
@@ -27,6 +34,13 @@ CommandLine::CommandLine(int argc, char** argv, const std::vector<std::string>& 
       throw std::invalid_argument("unknown option \"" + arg + "\" (see --help)");
     }
   }
+}
+
+const std::string& CommandLine::positional(size_t i) const {
+  if (i >= positional_.size()) {
+    throw std::invalid_argument("missing " + (i < positional_names_.size() ? positional_names_[i] : "argument") + " (see --help)");
+  }
+  return positional_[i];
 }
 
 std::string CommandLine::get(const std::string& name, const std::string& fallback) const {
@@ -70,6 +84,17 @@ int runTool(const char* tool, int (*run)(int, char**), int argc, char** argv) {
     std::cerr << "\n" << tool << ": error: " << e.what() << "\n";
     return 1;
   }
+}
+
+TumSequence openSequence(const CommandLine& args) {
+  TumSequence sequence = TumSequence::open(args.positional(0));
+  if (args.has("frames")) {
+    const int frames = parseInteger("--frames", args.get("frames"));
+    if (frames < 1) throw std::invalid_argument("--frames must be at least 1 (got " + args.get("frames") + ")");
+    sequence.truncate(static_cast<size_t>(frames));
+  }
+  if (sequence.size() == 0) throw std::runtime_error(args.positional(0) + "/depth.txt lists no frame");
+  return sequence;
 }
 
 }  // namespace sdf_tracker::tools

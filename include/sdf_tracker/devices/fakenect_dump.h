@@ -1,0 +1,48 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace sdf_tracker::devices {
+
+/// A libfreenect "fakenect" recording: a folder with INDEX.txt naming one file per event, in the
+/// order they are replayed, as fakenect-record writes it. Depth frames are
+/// "d-<seconds>-<device timestamp>.pgm": a one-line PGM header, then 640x480 raw 11-bit
+/// disparities as 16-bit values in the machine's byte order (what the device callback receives).
+/// The seconds are the wall-clock time of the recording; fakenect replays with the same gaps.
+namespace fakenect {
+constexpr int kWidth = 640;
+constexpr int kHeight = 480;
+constexpr const char* kIndexFile = "INDEX.txt";
+}  // namespace fakenect
+
+/// Writes a recording into a new folder. Everything goes to "<folder>.partial" first and is
+/// renamed when finish() is called, so a killed conversion never leaves a folder fakenect would
+/// play. Throws std::runtime_error naming the file on any failure.
+class FakenectDumpWriter {
+ public:
+  /// Refuses an existing folder (it would mix two recordings).
+  explicit FakenectDumpWriter(std::string folder);
+  ~FakenectDumpWriter();
+  FakenectDumpWriter(const FakenectDumpWriter&) = delete;
+  FakenectDumpWriter& operator=(const FakenectDumpWriter&) = delete;
+
+  /// One depth frame of kWidth x kHeight raw disparities recorded at time_s (seconds).
+  void addDepth(double time_s, const std::vector<uint16_t>& disparities);
+  /// The folder being written, where other files belonging to the recording go.
+  const std::string& stagingFolder() const { return staging_; }
+  void finish();
+
+ private:
+  std::string folder_, staging_;
+  std::vector<std::string> index_;
+  double first_time_s_ = 0.0;
+  bool finished_ = false;
+};
+
+/// The recording times (seconds) of the depth frames of a recording, in replay order, from its
+/// INDEX.txt. Throws std::runtime_error naming the file and line if it cannot be read.
+std::vector<double> readFakenectDepthTimes(const std::string& folder);
+
+}  // namespace sdf_tracker::devices

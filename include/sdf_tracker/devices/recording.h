@@ -1,0 +1,26 @@
+#pragma once
+
+#include <string>
+
+#include "sdf_tracker/core/camera.h"
+
+namespace sdf_tracker {
+class TumSequence;
+}
+
+namespace sdf_tracker::devices {
+
+/// Seconds added to a sequence's stamps when it becomes a ROS recording (bag, fakenect dump,
+/// .oni): 1 s if they start below 1 s, since ROS time 0 means "no time"; otherwise none.
+double rosStampOffset(const TumSequence& sequence);
+
+/// Where a recording's depth calibration lives, in camera_info_manager's YAML: inside a folder
+/// recording (fakenect dump), beside a file recording ("x.oni" -> "x.oni.yaml"). The converters
+/// write it there; the drivers read it from there when ~depth_camera_info_url is not set.
+std::string calibrationFileFor(const std::string& recording);
+
+/// Writes a camera_info_manager (camera_calibration_parsers) YAML file for a pinhole camera
+/// without distortion. Throws std::runtime_error naming the file if it cannot be written.
+void writeCalibrationFile(const std::string& path, const PinholeCamera& camera, const std::string& camera_name);
+
+}  // namespace sdf_tracker::devices

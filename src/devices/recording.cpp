@@ -1,0 +1,36 @@
+#include "sdf_tracker/devices/recording.h"
+
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include "sdf_tracker/core/tum_sequence.h"
+
+namespace sdf_tracker::devices {
+
+double rosStampOffset(const TumSequence& sequence) {
+  return sequence.size() > 0 && sequence.timestamp(0) < 1.0 ? 1.0 : 0.0;
+}
+
+std::string calibrationFileFor(const std::string& recording) {
+  if (std::filesystem::is_directory(recording)) return recording + "/depth_camera_info.yaml";
+  return recording + ".yaml";
+}
+
+void writeCalibrationFile(const std::string& path, const PinholeCamera& camera, const std::string& camera_name) {
+  std::ofstream out(path);
+  out.precision(10);
+  out << "image_width: " << camera.width << "\n"
+      << "image_height: " << camera.height << "\n"
+      << "camera_name: " << camera_name << "\n"
+      << "camera_matrix:\n  rows: 3\n  cols: 3\n  data: [" << camera.fx << ", 0, " << camera.cx << ", 0, " << camera.fy
+      << ", " << camera.cy << ", 0, 0, 1]\n"
+      << "distortion_model: plumb_bob\n"
+      << "distortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [0, 0, 0, 0, 0]\n"
+      << "rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n"
+      << "projection_matrix:\n  rows: 3\n  cols: 4\n  data: [" << camera.fx << ", 0, " << camera.cx << ", 0, 0, "
+      << camera.fy << ", " << camera.cy << ", 0, 0, 0, 1, 0]\n";
+  if (!out.flush()) throw std::runtime_error("cannot write " + path);
+}
+
+}  // namespace sdf_tracker::devices

@@ -1,0 +1,78 @@
+// tum_to_fakenect: turns a TUM-layout depth sequence into a libfreenect "fakenect" recording, so a
+// Kinect v1 can be replayed through libfreenect itself:
+//   rosrun sdf_tracker tum_to_fakenect SEQUENCE_DIR DUMP_DIR [--frames N]
+//   roslaunch sdf_tracker kinect.launch fakenect:=DUMP_DIR
+
+#include <cmath>
+#include <iostream>
+
+#include "command_line.h"
+#include "sdf_tracker/devices/fakenect_dump.h"
+#include "sdf_tracker/devices/kinect_disparity.h"
+#include "sdf_tracker/devices/recording.h"
+
+namespace {
+
+namespace st = sdf_tracker;
+namespace dev = sdf_tracker::devices;
+
+const char* kUsage = R"(usage: tum_to_fakenect SEQUENCE_DIR DUMP_DIR [--frames N]
+
+Writes a fakenect recording (libfreenect's replay format: INDEX.txt and one PGM per frame) of a
+640x480 TUM-layout depth sequence: each depth becomes the raw 11-bit disparity a Kinect v1 sends
+for it (libfreenect's depth model with the factory zero-plane values), at the sequence's stamps
+(shifted by 1 s if they start below 1 s, as ROS time 0 means "no time"). The sequence's
+intrinsics go to DUMP_DIR/depth_camera_info.yaml, where kinect.launch finds them.
+DUMP_DIR must not exist; it appears only when the recording is complete.
+
+  --frames N   only the first N frames
+)";
+
+int run(int argc, char** argv) {
+  const st::tools::CommandLine args(argc, argv, {"frames"}, {"help"}, {"SEQUENCE_DIR", "DUMP_DIR"});
+  if (args.has("help")) {
+    std::cout << kUsage;
+    return 0;
+  }
+  const st::TumSequence sequence = st::tools::openSequence(args);
+  const st::PinholeCamera& camera = sequence.camera();
+  if (camera.width != dev::fakenect::kWidth || camera.height != dev::fakenect::kHeight) {
+    throw std::invalid_argument("fakenect replays 640x480 depth only; " + args.positional(0) + " is " +
+                                std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  }
+  const double offset_s = dev::rosStampOffset(sequence);
+  const dev::KinectDisparityTable table;
+  dev::FakenectDumpWriter writer(args.positional(1));
+  size_t out_of_range = 0, measured = 0;
+  std::vector<uint16_t> disparities(static_cast<size_t>(camera.width) * camera.height);
+  for (size_t i = 0; i < sequence.size(); ++i) {
+    const st::DepthImage depth = sequence.depth(i);
+    for (int v = 0; v < camera.height; ++v) {
+      for (int u = 0; u < camera.width; ++u) {
+        const float z = depth.at(u, v);
+        uint16_t disparity = dev::kKinectNoDisparity;
+        if (std::isfinite(z) && z > 0.0f) {
+          ++measured;
+          disparity = table.fromMillimetres(static_cast<uint16_t>(std::min(65535L, std::lround(z * 1000.0f))));
+          if (disparity == dev::kKinectNoDisparity) ++out_of_range;
+        }
+        disparities[static_cast<size_t>(v) * camera.width + u] = disparity;
+      }
+    }
+    writer.addDepth(sequence.timestamp(i) + offset_s, disparities);
+  }
+  dev::writeCalibrationFile(dev::calibrationFileFor(writer.stagingFolder()), camera, "depth");
+  writer.finish();
+  std::cout << "wrote " << sequence.size() << " depth frames to " << args.positional(1);
+  if (offset_s != 0.0) std::cout << " (stamps shifted by " << offset_s << " s)";
+  std::cout << "\n";
+  if (out_of_range > 0) {
+    std::cout << out_of_range << " of " << measured << " depths lie outside what a Kinect reports ("
+              << table.nearest_mm() << "-" << table.farthest_mm() << " mm) and were recorded as no data\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return st::tools::runTool("tum_to_fakenect", run, argc, argv); }

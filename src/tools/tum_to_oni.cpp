@@ -1,0 +1,64 @@
+// tum_to_oni: turns a TUM-layout depth sequence into an OpenNI 2 recording (.oni), so a depth
+// camera can be replayed through OpenNI 2's own OniFile driver:
+//   rosrun sdf_tracker tum_to_oni SEQUENCE_DIR OUT.oni [--frames N]
+//   roslaunch sdf_tracker openni2.launch device:=OUT.oni
+
+#include <cmath>
+#include <iostream>
+
+#include "command_line.h"
+#include "sdf_tracker/devices/oni_file.h"
+#include "sdf_tracker/devices/recording.h"
+
+namespace {
+
+namespace st = sdf_tracker;
+namespace dev = sdf_tracker::devices;
+
+const char* kUsage = R"(usage: tum_to_oni SEQUENCE_DIR OUT.oni [--frames N]
+
+Writes an OpenNI 2 recording of a TUM-layout depth sequence: one depth stream in millimetres
+(uncompressed: about 0.6 MB per 640x480 frame), at the sequence's stamps (shifted by 1 s if they
+start below 1 s, as ROS time 0 means "no time"), with the field of view of its intrinsics. The
+full intrinsics go to OUT.oni.yaml, where openni2.launch finds them. OUT.oni appears only when
+the recording is complete.
+
+  --frames N   only the first N frames
+)";
+
+int run(int argc, char** argv) {
+  const st::tools::CommandLine args(argc, argv, {"frames"}, {"help"}, {"SEQUENCE_DIR", "OUT.oni"});
+  if (args.has("help")) {
+    std::cout << kUsage;
+    return 0;
+  }
+  const st::TumSequence sequence = st::tools::openSequence(args);
+  const st::PinholeCamera& camera = sequence.camera();
+  const double offset_s = dev::rosStampOffset(sequence);
+  dev::OniDepthWriter::Stream stream;
+  stream.width = camera.width;
+  stream.height = camera.height;
+  stream.horizontal_fov_rad = 2.0 * std::atan(camera.width / (2.0 * camera.fx));
+  stream.vertical_fov_rad = 2.0 * std::atan(camera.height / (2.0 * camera.fy));
+  dev::OniDepthWriter writer(args.positional(1), stream);
+  std::vector<uint16_t> depth_mm(static_cast<size_t>(camera.width) * camera.height);
+  for (size_t i = 0; i < sequence.size(); ++i) {
+    const st::DepthImage depth = sequence.depth(i);
+    for (size_t p = 0; p < depth_mm.size(); ++p) {
+      const float z = depth.data()[p];
+      depth_mm[p] = std::isfinite(z) && z > 0.0f ? static_cast<uint16_t>(std::min(65535L, std::lround(z * 1000.0f))) : 0;
+    }
+    writer.addFrame(static_cast<uint64_t>(std::llround((sequence.timestamp(i) + offset_s) * 1e6)), depth_mm);
+  }
+  dev::writeCalibrationFile(dev::calibrationFileFor(args.positional(1)), camera, "depth");
+  writer.finish();
+  std::cout << "wrote " << sequence.size() << " depth frames (" << camera.width << "x" << camera.height << ") to "
+            << args.positional(1);
+  if (offset_s != 0.0) std::cout << " (stamps shifted by " << offset_s << " s)";
+  std::cout << "\n";
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return st::tools::runTool("tum_to_oni", run, argc, argv); }

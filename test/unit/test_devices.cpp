@@ -1,0 +1,124 @@
+// Depth cameras' own formats: the Kinect v1's disparity model, fakenect recordings as libfreenect
+// replays them, and the calibration file the drivers read.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "sdf_tracker/devices/fakenect_dump.h"
+#include "sdf_tracker/devices/kinect_disparity.h"
+#include "sdf_tracker/devices/recording.h"
+#include "test_helpers.h"
+
+namespace sdf_tracker::devices {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(KinectDisparity, MatchesLibfreenectsModelAtKnownPoints) {
+  const KinectDisparityTable table;
+  // libfreenect with the factory zero plane: disparity 4 * (const_shift + 0.375) = 801.5 lies on
+  // the zero plane (1.2 m); the model's depth grows with disparity.
+  EXPECT_NEAR(table.toMillimetres(802), 1200, 3);
+  EXPECT_NEAR(table.toMillimetres(1000), 3864, 2);
+  EXPECT_EQ(table.toMillimetres(kKinectNoDisparity), 0);
+  EXPECT_LT(table.nearest_mm(), 500);
+  EXPECT_GT(table.farthest_mm(), 8000);
+  for (uint16_t d = 1; d < 1050; ++d) {
+    if (table.toMillimetres(d) != 0 && table.toMillimetres(d - 1) != 0) {
+      EXPECT_GE(table.toMillimetres(d), table.toMillimetres(d - 1)) << "at disparity " << d;
+    }
+  }
+  EXPECT_NEAR(KinectZeroPlane().focalLength640_px(), 575.8, 0.1) << "freenect_camera's depth focal length";
+}
+
+TEST(KinectDisparity, RoundTripErrorIsHalfAStepOfTheSensor) {
+  const KinectDisparityTable table;
+  for (uint16_t mm = 600; mm <= 6000; mm += 7) {
+    const uint16_t d = table.fromMillimetres(mm);
+    ASSERT_NE(d, kKinectNoDisparity) << mm << " mm is within the Kinect's range";
+    const int step = table.toMillimetres(d + 1) - table.toMillimetres(d - 1);
+    EXPECT_LE(std::abs(table.toMillimetres(d) - mm), step / 2 + 1) << "at " << mm << " mm";
+  }
+  // Exact depths of the table come back exactly.
+  const uint16_t exact_mm = table.toMillimetres(900);
+  EXPECT_EQ(table.toMillimetres(table.fromMillimetres(exact_mm)), exact_mm);
+  EXPECT_EQ(table.fromMillimetres(0), kKinectNoDisparity);
+  EXPECT_EQ(table.fromMillimetres(60000), kKinectNoDisparity) << "beyond 10 m the Kinect reports nothing";
+  EXPECT_EQ(table.fromMillimetres(50), kKinectNoDisparity) << "too near for the Kinect";
+}
+
+TEST(FakenectDump, IsWrittenAsFakenectRecordReadsItAndOnlyWhenComplete) {
+  const std::string root = test::scratchDirectory("fakenect");
+  const std::string dump = root + "/dump";
+  std::vector<uint16_t> frame(fakenect::kWidth * fakenect::kHeight, kKinectNoDisparity);
+  frame[0] = 802;
+  frame[1] = 1000;
+  {
+    FakenectDumpWriter writer(dump);
+    writer.addDepth(1305031102.175304, frame);
+    writer.addDepth(1305031102.211214, frame);
+    EXPECT_FALSE(fs::exists(dump)) << "the recording appears only when complete";
+    EXPECT_THROW(writer.addDepth(1.0, std::vector<uint16_t>(10)), std::invalid_argument);
+    writer.finish();
+  }
+  ASSERT_TRUE(fs::exists(dump + "/INDEX.txt"));
+  EXPECT_FALSE(fs::exists(dump + ".partial"));
+  const std::vector<double> times = readFakenectDepthTimes(dump);
+  ASSERT_EQ(times.size(), 2u);
+  EXPECT_NEAR(times[0], 1305031102.175304, 1e-6);
+  EXPECT_NEAR(times[1], 1305031102.211214, 1e-6);
+
+  // fakenect's reader: "<type>-<seconds>-<timestamp>.pgm", a one-line header, raw values.
+  std::ifstream index(dump + "/INDEX.txt");
+  std::string first;
+  std::getline(index, first);
+  EXPECT_EQ(first.rfind("d-1305031102.175304-0.pgm", 0), 0u) << first;
+  std::ifstream pgm(dump + "/" + first, std::ios::binary);
+  std::string header;
+  std::getline(pgm, header);
+  EXPECT_EQ(header, "P5 640 480 65535");
+  uint16_t values[2];
+  pgm.read(reinterpret_cast<char*>(values), sizeof(values));
+  EXPECT_EQ(values[0], 802);
+  EXPECT_EQ(values[1], 1000);
+
+  EXPECT_THROW(FakenectDumpWriter{dump}, std::runtime_error) << "an existing recording is not overwritten";
+  {
+    FakenectDumpWriter abandoned(root + "/abandoned");
+    abandoned.addDepth(1.0, frame);
+  }
+  EXPECT_FALSE(fs::exists(root + "/abandoned")) << "a conversion that did not finish leaves nothing";
+  EXPECT_FALSE(fs::exists(root + "/abandoned.partial"));
+  fs::remove_all(root);
+}
+
+TEST(FakenectDump, AnIndexWithAStrayLineIsRefusedWithItsLineNumber) {
+  const std::string root = test::scratchDirectory("fakenect_index");
+  std::ofstream(root + "/INDEX.txt") << "d-1.000000-0.pgm\nnot a file name\n";
+  try {
+    readFakenectDepthTimes(root);
+    FAIL() << "a stray line was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("line 2"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(readFakenectDepthTimes(root + "/missing"), std::runtime_error);
+  fs::remove_all(root);
+}
+
+TEST(CalibrationFile, HoldsTheIntrinsicsInCameraInfoManagersLayout) {
+  const std::string root = test::scratchDirectory("calibration");
+  EXPECT_EQ(calibrationFileFor(root), root + "/depth_camera_info.yaml");
+  EXPECT_EQ(calibrationFileFor(root + "/x.oni"), root + "/x.oni.yaml");
+  writeCalibrationFile(root + "/c.yaml", PinholeCamera::tumFreiburg1(), "depth");
+  std::ifstream in(root + "/c.yaml");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("image_width: 640"), std::string::npos);
+  EXPECT_NE(text.find("data: [517.3, 0, 318.6, 0, 516.5, 255.3, 0, 0, 1]"), std::string::npos) << text;
+  EXPECT_NE(text.find("distortion_model: plumb_bob"), std::string::npos);
+  fs::remove_all(root);
+}
+
+}  // namespace
+}  // namespace sdf_tracker::devices
