@@ -16,7 +16,7 @@ source devel/setup.bash
 set -u
 # Build every test in parallel, then run them one at a time: the rostests play bags at their real
 # rate and must not share the two cores with another test.
-catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$(nproc)" tests test_tum_bag \
+catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$(nproc)" tests test_tum_bag test_camera_replay \
   > "$repo/build/run_tests.log" 2>&1 || true
 catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j1 run_tests \
   >> "$repo/build/run_tests.log" 2>&1 || true
