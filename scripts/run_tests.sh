@@ -24,6 +24,8 @@ catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j1 
 RESULTS_DIR="$repo/build/ws/build/test_results/sanitize" bash "$repo/scripts/run_sanitizers.sh" || true
 # What the tests printed about themselves: figures, skips, failures.
 grep -E "^\[ (figures|  SKIPPED|  FAILED) *\]|SKIPPED:|Failure|\.cpp:[0-9]+:" "$repo/build/run_tests.log" | sort -u || true
+# The rostests' figures are in their result files.
+grep -rhoE "\[ figures  \][^<&]*" "$repo/build/ws/build/test_results" | sort -u || true
 # Count from the result files, so a crashed test binary counts as a failure too.
 /usr/bin/python3 - "$repo/build/ws/build/test_results" <<'PY'
 import glob, os, sys, xml.etree.ElementTree as ET

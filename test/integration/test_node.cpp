@@ -5,11 +5,14 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+
 #include <condition_variable>
 #include <map>
 #include <mutex>
 #include <optional>
 #include <set>
+#include <tuple>
 
 #include <dynamic_reconfigure/Reconfigure.h>
 #include <geometry_msgs/PoseStamped.h>
@@ -371,6 +374,45 @@ TEST_F(NodeTest, EveryLiveParameterIsReconfigurableAndEveryOutOfRangeValueIsRefu
       EXPECT_EQ(in_force.at(spec.name), spec.get(expected)) << spec.name;
     }
   }
+}
+
+/// Runs a command through the shell; returns its exit code and what it printed.
+std::pair<int, std::string> runCommand(const std::string& command) {
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  std::string output;
+  char buffer[4096];
+  while (pipe && fgets(buffer, sizeof(buffer), pipe)) output += buffer;
+  const int status = pipe ? pclose(pipe) : -1;
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+// The camera drivers on a machine without a camera, or pointed at a recording that is not there:
+// an error that names what is missing, and a non-zero exit (roslaunch then ends the launch).
+TEST(CameraDrivers, WithoutACameraOrRecordingExitWithAnErrorNamingIt) {
+  const std::string driver = "ROS_NAMESPACE=no_camera timeout 30 rosrun sdf_tracker ";
+  auto [code, output] = runCommand(driver + "openni2_depth_publisher");
+  EXPECT_EQ(code, 1) << output;
+  EXPECT_NE(output.find("no OpenNI 2 camera found"), std::string::npos) << output;
+
+  std::tie(code, output) = runCommand(driver + "openni2_depth_publisher _device_id:=/nonexistent/recording.oni");
+  EXPECT_EQ(code, 1) << output;
+  EXPECT_NE(output.find("cannot open ~device_id \"/nonexistent/recording.oni\""), std::string::npos) << output;
+
+  std::tie(code, output) = runCommand(driver + "openni2_depth_publisher _depth_mode:=HD");
+  EXPECT_EQ(code, 1) << output;
+  EXPECT_NE(output.find("~depth_mode must be VGA or QVGA (got \"HD\")"), std::string::npos) << output;
+
+  std::tie(code, output) = runCommand(driver + "kinect_depth_publisher");
+  EXPECT_EQ(code, 1) << output;
+  EXPECT_TRUE(output.find("no Kinect found") != std::string::npos ||
+              output.find("libfreenect failed to initialise") != std::string::npos)
+      << output;
+
+  // Through libfreenect's own replay wrapper, as kinect.launch fakenect:= runs it.
+  std::tie(code, output) = runCommand("ROS_NAMESPACE=no_camera timeout 30 fakenect /nonexistent/dump rosrun sdf_tracker kinect_depth_publisher");
+  EXPECT_EQ(code, 1) << output;
+  EXPECT_NE(output.find("FAKENECT_PATH=/nonexistent/dump: cannot open /nonexistent/dump/INDEX.txt"), std::string::npos)
+      << output;
 }
 
 }  // namespace
