@@ -10,6 +10,9 @@ bash "$repo/scripts/build.sh" -DCATKIN_ENABLE_TESTING=ON
 export PATH="/usr/bin:$PATH"
 cd "$repo/build/ws"
 rm -rf build/test_results
+# The rostests' nodes log here (their figures are read back below).
+export ROS_LOG_DIR="$repo/build/ros_log"
+rm -rf "$ROS_LOG_DIR"
 set +u
 # shellcheck disable=SC1091
 source devel/setup.bash
@@ -24,8 +27,8 @@ catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j1 
 RESULTS_DIR="$repo/build/ws/build/test_results/sanitize" bash "$repo/scripts/run_sanitizers.sh" || true
 # What the tests printed about themselves: figures, skips, failures.
 grep -E "^\[ (figures|  SKIPPED|  FAILED) *\]|SKIPPED:|Failure|\.cpp:[0-9]+:" "$repo/build/run_tests.log" | sort -u || true
-# The rostests' figures are in their result files.
-grep -rhoE "\[ figures  \][^<&]*" "$repo/build/ws/build/test_results" | sort -u || true
+# The rostests' figures are in their logs.
+grep -rhoE "\[ figures  \].*" "$ROS_LOG_DIR" 2>/dev/null | sort -u || true
 # Count from the result files, so a crashed test binary counts as a failure too.
 /usr/bin/python3 - "$repo/build/ws/build/test_results" <<'PY'
 import glob, os, sys, xml.etree.ElementTree as ET
