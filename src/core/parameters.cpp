@@ -274,8 +274,12 @@ std::vector<ParameterSpec> buildTable() {
   t.push_back(bound<int>("MinValidPoints", "", "fewer tracked points than this: too_few_points", closed(6, 1e8),
                          same(200), kLive, kAll, [](auto& s) -> auto& { return s.pipeline.tracker.min_valid_points; }));
   t.push_back(bound<double>("MinInverseCondition", "", "below this the geometry is degenerate", closed(0.0, 1.0),
-                            same(1e-4), kLive, kAll,
+                            {1e-3, 1e-4, 1e-4}, kLive, kAll,
                             [](auto& s) -> auto& { return s.pipeline.tracker.min_inverse_condition; }));
+  t.push_back(bound<bool>("SolveConstrainedDirections", "",
+                          "degenerate geometry: solve the directions it constrains, predict the rest (off: the frame fails)",
+                          {}, {true, false, false}, kLive, kAll,
+                          [](auto& s) -> auto& { return s.pipeline.tracker.solve_constrained_directions; }));
   t.push_back(bound<bool>("MotionPrediction", "",
                           "start tracking from a constant-velocity prediction scaled to the time since the last frame",
                           {}, {true, false, false}, kLive, kAll,

@@ -163,16 +163,14 @@ FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCame
     const auto start = std::chrono::steady_clock::now();
     const Eigen::Isometry3d predicted = predictPose(timestamp_s);
     report.track = tracker_->track(filtered, camera, *volume_, predicted);
-    if (!report.track.ok() && !predicted.isApprox(T_W_C_)) {
+    if (!report.track.tracked() && !predicted.isApprox(T_W_C_)) {
       // The prediction may have led astray (the camera stopped or turned): try from the last pose.
       TrackResult from_last = tracker_->track(filtered, camera, *volume_, T_W_C_);
-      if (from_last.ok()) report.track = std::move(from_last);
+      if (from_last.tracked()) report.track = std::move(from_last);
     }
     report.tracking_ms = millisecondsSince(start);
-    const bool pose_usable =
-        report.track.status == TrackStatus::kOk || report.track.status == TrackStatus::kNotConverged;
-    if (pose_usable) T_W_C_ = report.track.T_W_C;
-    if (!report.track.ok()) {
+    if (report.track.pose_estimated) T_W_C_ = report.track.T_W_C;
+    if (!report.track.tracked()) {
       ++consecutive_failures_;
       return report;  // never fuse on a failed frame
     }

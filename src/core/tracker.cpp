@@ -107,16 +107,44 @@ NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_
   return sum;
 }
 
-/// Smallest over largest eigenvalue of the data term, with the rotational block scaled by the RMS
-/// lever arm so both blocks are in the same units.
-double inverseCondition(const NormalEquations& eq) {
-  const double lever_rms = std::sqrt(eq.squared_lever_sum / eq.count);
+/// The data term in balanced units: the rotational block scaled by the RMS lever arm, so that
+/// eigenvalues of rotation and translation compare. xi = scale .* y for y in these units.
+struct ScaledEquations {
   Vector6d scale;
-  scale << Eigen::Vector3d::Constant(1.0 / std::max(lever_rms, 1e-6)), Eigen::Vector3d::Ones();
-  const Matrix6d H_scaled = scale.asDiagonal() * eq.H * scale.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> solver(H_scaled, Eigen::EigenvaluesOnly);
-  const Vector6d& ev = solver.eigenvalues();
-  return ev(5) > 0.0 ? std::max(ev(0), 0.0) / ev(5) : 0.0;
+  Eigen::SelfAdjointEigenSolver<Matrix6d> eigen;  ///< of diag(scale) H diag(scale), ascending
+  /// Directions whose eigenvalue reaches min_inverse_condition times the largest.
+  int constrainedRank(double min_inverse_condition) const {
+    const Vector6d& ev = eigen.eigenvalues();
+    int rank = 0;
+    for (int i = 0; i < 6; ++i) rank += ev(5) > 0.0 && ev(i) >= min_inverse_condition * ev(5);
+    return rank;
+  }
+  /// Smallest over largest eigenvalue.
+  double inverseCondition() const {
+    const Vector6d& ev = eigen.eigenvalues();
+    return ev(5) > 0.0 ? std::max(ev(0), 0.0) / ev(5) : 0.0;
+  }
+};
+
+ScaledEquations scaleEquations(const NormalEquations& eq) {
+  const double lever_rms = std::sqrt(eq.squared_lever_sum / std::max(eq.count, 1));
+  ScaledEquations scaled;
+  scaled.scale << Eigen::Vector3d::Constant(1.0 / std::max(lever_rms, 1e-6)), Eigen::Vector3d::Ones();
+  scaled.eigen.compute(scaled.scale.asDiagonal() * eq.H * scaled.scale.asDiagonal());
+  return scaled;
+}
+
+/// The regularised Gauss-Newton step (H + alpha I) xi = -g restricted to the `rank` best
+/// constrained directions of the scaled equations; zero along the others.
+Vector6d constrainedStep(const NormalEquations& eq, const ScaledEquations& scaled, int rank, double alpha) {
+  if (rank <= 0) return Vector6d::Zero();
+  const Eigen::MatrixXd V = scaled.eigen.eigenvectors().rightCols(rank);  // y = V z
+  const Matrix6d S = scaled.scale.asDiagonal();
+  const Matrix6d A_scaled = S * (eq.H + alpha * Matrix6d::Identity()) * S;
+  const Eigen::MatrixXd A = V.transpose() * A_scaled * V;
+  const Eigen::VectorXd b = -V.transpose() * (S * eq.g);
+  const Eigen::VectorXd z = A.ldlt().solve(b);
+  return S * (V * z);
 }
 
 Eigen::Isometry3d applyIncrementAboutCentre(const Vector6d& xi, const Eigen::Isometry3d& T_W_C) {
@@ -198,8 +226,14 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
         return fail(TrackStatus::kTooFewPoints, msg.str());
       }
       // Sums, not means: alpha only matters along directions the points barely constrain.
-      const Matrix6d A = last.H + (config_.regularization * it) * Matrix6d::Identity();
-      const Vector6d xi = A.ldlt().solve(-last.g);
+      const double alpha = config_.regularization * it;
+      Vector6d xi;
+      if (config_.solve_constrained_directions) {
+        const ScaledEquations scaled = scaleEquations(last);
+        xi = constrainedStep(last, scaled, scaled.constrainedRank(config_.min_inverse_condition), alpha);
+      } else {
+        xi = (last.H + alpha * Matrix6d::Identity()).ldlt().solve(-last.g);
+      }
       ++iterations;
       result.final_step = xi.norm();
       if (!xi.allFinite()) return fail(TrackStatus::kDiverged, "the Gauss-Newton step is not finite");
@@ -212,7 +246,11 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
   result.T_W_C = T_W_C;
   result.valid_points = last.count;
   result.rms_residual_m = last.count > 0 ? std::sqrt(last.squared_residual_sum / last.count) : 0.0;
-  result.inverse_condition = last.count > 0 ? inverseCondition(last) : 0.0;
+  if (last.count > 0) {
+    const ScaledEquations scaled = scaleEquations(last);
+    result.inverse_condition = scaled.inverseCondition();
+    result.constrained_rank = scaled.constrainedRank(config_.min_inverse_condition);
+  }
 
   const Eigen::Isometry3d motion = T_W_C_guess.inverse() * T_W_C;
   std::ostringstream msg;
@@ -223,19 +261,26 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
         << " rad)";
     return fail(TrackStatus::kDiverged, msg.str());
   }
-  if (result.inverse_condition < config_.min_inverse_condition) {
-    msg << "the geometry does not constrain all six degrees of freedom (inverse condition "
+  if (result.constrained_rank < 6) {
+    msg << "the geometry constrains " << result.constrained_rank << " of six degrees of freedom (inverse condition "
         << result.inverse_condition << " < " << config_.min_inverse_condition << ")";
-    return fail(TrackStatus::kDegenerate, msg.str());
+    if (!config_.solve_constrained_directions) return fail(TrackStatus::kDegenerate, msg.str());
+    msg << "; the others follow the guess";
+    result.status = TrackStatus::kDegenerate;
+    result.message = msg.str();
+    result.pose_estimated = true;
+    return result;
   }
   if (result.final_step > config_.max_final_step) {
     msg << "still moving after the last iteration (|delta xi| = " << result.final_step << " > "
         << config_.max_final_step << ")";
     result.status = TrackStatus::kNotConverged;
     result.message = msg.str();
+    result.pose_estimated = true;
     return result;
   }
   result.status = TrackStatus::kOk;
+  result.pose_estimated = true;
   return result;
 }
 

@@ -245,8 +245,10 @@ void TrackerServer::process(const Frame& frame) {
               kLostAfterFailedFrames, statusText(t).c_str());
   } else if (!lost_ && was_lost) {
     ROS_INFO("sdf_tracker: relocalised; tracking again");
-  } else if (!t.ok() && !lost_) {
+  } else if (!t.tracked() && !lost_) {
     ROS_WARN_THROTTLE(kThrottle_s, "sdf_tracker: %s (pose held, frame not fused)", statusText(t).c_str());
+  } else if (!t.ok() && !lost_) {
+    ROS_WARN_THROTTLE(kThrottle_s, "sdf_tracker: %s", statusText(t).c_str());
   }
   if (report.reset) ROS_WARN("sdf_tracker: map cleared after repeated failures (ResetAfterFailures)");
 
@@ -256,6 +258,7 @@ void TrackerServer::process(const Frame& frame) {
   status.rms_residual_m = t.rms_residual_m;
   status.valid_points = t.valid_points;
   status.inverse_condition = t.inverse_condition;
+  status.constrained_rank = t.constrained_rank;
   status.tracking_ms = report.tracking_ms;
   status.fusion_ms = report.fusion_ms;
   status.fused = report.fused;

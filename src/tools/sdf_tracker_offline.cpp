@@ -163,18 +163,19 @@ int run(int argc, char** argv) {
             << " m, schedule " << st::formatSchedule(pipeline.config().tracker.levels) << "\n";
 
   std::ostringstream frames_csv;
-  frames_csv << "timestamp,status,iterations,rms_residual_m,valid_points,inverse_condition,tracking_ms,fusion_ms,"
-                "fused,message\n";
+  frames_csv << "timestamp,status,iterations,rms_residual_m,valid_points,inverse_condition,constrained_rank,"
+                "tracking_ms,fusion_ms,fused,message\n";
   std::vector<st::io::StampedPose> trajectory;
   std::vector<double> frame_ms, tracking_ms, fusion_ms, raycast_ms;
-  size_t failed = 0;
+  size_t failed = 0, degenerate = 0;
   st::tools::ProgressBar progress(sequence.size(), !args.has("quiet"));
   const auto start = std::chrono::steady_clock::now();
   for (size_t i = 0; i < sequence.size(); ++i) {
     const st::DepthImage depth = sequence.depth(i);
     const st::FrameReport report = pipeline.processFrame(depth, camera, sequence.timestamp(i));
     const st::TrackResult& t = report.track;
-    if (!t.ok()) ++failed;
+    if (!t.tracked()) ++failed;
+    if (t.tracked() && t.status == st::TrackStatus::kDegenerate) ++degenerate;
     trajectory.push_back({sequence.timestamp(i), pipeline.pose()});
     double cast_ms = 0.0;
     if (args.has("raycast")) {
@@ -192,7 +193,8 @@ int run(int argc, char** argv) {
     std::replace(message.begin(), message.end(), ',', ';');
     frames_csv << std::fixed << std::setprecision(6) << sequence.timestamp(i) << ',' << st::toString(t.status) << ','
                << joinIterations(t.iterations_per_level) << ',' << std::setprecision(6) << t.rms_residual_m << ','
-               << t.valid_points << ',' << std::setprecision(6) << t.inverse_condition << ',' << std::setprecision(3)
+               << t.valid_points << ',' << std::setprecision(6) << t.inverse_condition << ',' << t.constrained_rank
+               << ',' << std::setprecision(3)
                << report.tracking_ms << ',' << report.fusion_ms << ',' << (report.fused ? 1 : 0) << ',' << message
                << '\n';
     progress.update(i + 1);
@@ -218,8 +220,9 @@ int run(int argc, char** argv) {
   const size_t tracked = sequence.size() - failed - 1;
   std::ostringstream summary;
   summary << std::fixed << std::setprecision(2);
-  summary << "frames " << sequence.size() << ", tracked ok " << sequence.size() - failed << ", failed " << failed
-          << "\n";
+  summary << "frames " << sequence.size() << ", tracked ok " << sequence.size() - failed - degenerate;
+  if (degenerate > 0) summary << ", degenerate " << degenerate << " (solved where the geometry constrains the pose)";
+  summary << ", failed " << failed << "\n";
   summary << "speed " << sequence.size() / elapsed_s << " frames/s including file reading; per frame (ms): median "
           << percentile(frame_ms, 0.5) << ", p95 " << percentile(frame_ms, 0.95) << "; tracking median "
           << percentile(tracking_ms, 0.5) << ", fusion median " << percentile(fusion_ms, 0.5);
@@ -233,7 +236,7 @@ int run(int argc, char** argv) {
   std::ostringstream json;
   json << "{\n  \"sequence\": " << jsonString(sequence_dir) << ",\n  \"preset\": "
        << jsonString(args.get("preset", "default")) << ",\n  \"frames\": " << sequence.size()
-       << ",\n  \"failed_frames\": " << failed << ",\n  \"grid\": [" << v.dims.x() << ", " << v.dims.y() << ", "
+       << ",\n  \"failed_frames\": " << failed << ",\n  \"degenerate_frames\": " << degenerate << ",\n  \"grid\": [" << v.dims.x() << ", " << v.dims.y() << ", "
        << v.dims.z() << "],\n  \"voxel_count\": " << pipeline.volume().voxelCount()
        << ",\n  \"voxel_size_m\": " << jsonNumber(v.voxel_size_m)
        << ",\n  \"compact_voxels\": " << (v.compact_voxels ? "true" : "false")

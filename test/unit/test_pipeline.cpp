@@ -144,4 +144,37 @@ TEST(Pipeline, MotionPredictionBridgesDroppedFramesWithFewerIterations) {
 }
 
 }  // namespace
+TEST(Pipeline, DegenerateFramesAreReportedWithTheirRankTrackedWhereConstrainedAndFused) {
+  // Sliding along a single wall: the distance to it and the tilts are seen, the slide and the roll
+  // about the wall's normal are not.
+  const PinholeCamera camera = test::testCamera();
+  synthetic::NoiseModel exact;
+  exact.enabled = false;
+  const synthetic::Scene wall = synthetic::Scene::singleWall();
+  PipelineConfig config = preset("default").pipeline;
+  config.volume.dims = Eigen::Vector3i(160, 128, 128);  // the wall is 2 m ahead
+  config.volume.voxel_size_m = 0.02;
+  SdfPipeline pipeline(config);
+  const Eigen::Isometry3d T_scene_W = synthetic::cameraPose(synthetic::Motion::kPlanar, 0.0, 10.0);
+  int degenerate = 0, fused = 0;
+  for (int i = 0; i < 30; ++i) {
+    const double t = i * kFramePeriod_s;
+    const Eigen::Isometry3d T_scene_C = synthetic::cameraPose(synthetic::Motion::kPlanar, t, 10.0);
+    const FrameReport report = pipeline.processFrame(wall.render(camera, T_scene_C, exact, 0), camera, t);
+    if (i == 0) continue;
+    EXPECT_TRUE(report.track.tracked()) << "frame " << i << ": " << report.track.message;
+    if (report.track.status == TrackStatus::kDegenerate) {
+      ++degenerate;
+      EXPECT_EQ(report.track.constrained_rank, 3) << "frame " << i << ": " << report.track.message;
+    }
+    fused += report.fused;
+    // The distance to the wall is observed: it stays right even though the slide is not.
+    const Eigen::Isometry3d truth = T_scene_W.inverse() * T_scene_C;
+    EXPECT_NEAR(pipeline.pose().translation().z(), truth.translation().z(), 0.005) << "frame " << i;
+  }
+  EXPECT_EQ(degenerate, 29) << "every tracked frame of a single wall is degenerate";
+  EXPECT_GT(fused, 0) << "degenerate frames still build the map";
+  EXPECT_EQ(pipeline.consecutiveFailures(), 0);
+}
+
 }  // namespace sdf_tracker

@@ -125,6 +125,69 @@ TEST(Tracker, ASinglePlaneIsReportedAsDegenerate) {
   EXPECT_TRUE(result.T_W_C.isApprox(test::perturbed(T_W_C, 0.01, 0.01))) << "a degenerate frame must hold the pose";
 }
 
+TEST(Tracker, ASinglePlaneIsSolvedInTheThreeDirectionsItConstrains) {
+  const PinholeCamera camera = test::testCamera();
+  synthetic::NoiseModel exact;
+  exact.enabled = false;
+  const Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();  // facing the wall 2 m ahead along z
+  const DepthImage wall = synthetic::Scene::singleWall().render(camera, T_W_C, exact, 0);
+  VolumeConfig config;
+  config.dims = Eigen::Vector3i(200, 160, 60);
+  config.voxel_size_m = 0.02;
+  config.origin_W = Eigen::Vector3d(-2.0, -1.6, 1.4);
+  TsdfVolume volume(config);
+  Integrator(IntegratorConfig{}).integrate(wall, camera, T_W_C, &volume);
+
+  // The guess is off in every direction: along the wall (x, y) and about its normal (z), which
+  // the wall cannot tell, and in distance and tilt, which it can.
+  Eigen::Isometry3d guess = T_W_C;
+  guess.translation() = Eigen::Vector3d(0.03, -0.02, 0.04);
+  guess.linear() = (Eigen::AngleAxisd(0.03, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitX()) *
+                    Eigen::AngleAxisd(-0.02, Eigen::Vector3d::UnitY()))
+                       .toRotationMatrix();
+  TrackerConfig tracker_config;
+  tracker_config.solve_constrained_directions = true;
+  const TrackResult result = Tracker(tracker_config).track(wall, camera, volume, guess);
+  EXPECT_EQ(result.status, TrackStatus::kDegenerate) << result.message;
+  EXPECT_EQ(result.constrained_rank, 3) << "distance and two tilts";
+  EXPECT_TRUE(result.tracked()) << "the frame is used: its constrained directions are estimated";
+  EXPECT_NE(result.message.find("constrains 3 of six"), std::string::npos) << result.message;
+
+  // Constrained: the distance to the wall and its normal as the camera sees it.
+  const Eigen::Vector3d normal_C = result.T_W_C.linear().transpose() * Eigen::Vector3d::UnitZ();
+  EXPECT_NEAR(result.T_W_C.translation().z(), 0.0, 0.003);
+  EXPECT_LT(std::acos(std::min(1.0, normal_C.z())), 0.003) << "the tilt towards the wall is corrected";
+  // Unconstrained: kept from the guess, not pushed anywhere by noise or regularisation.
+  EXPECT_NEAR(result.T_W_C.translation().x(), 0.03, 0.003);
+  EXPECT_NEAR(result.T_W_C.translation().y(), -0.02, 0.003);
+  const Eigen::Vector3d x_axis = result.T_W_C.linear().col(0);
+  EXPECT_NEAR(std::atan2(x_axis.y(), x_axis.x()), 0.03, 0.003) << "the roll about the wall's normal";
+
+  // The paper's behaviour is still there: the frame fails and the guess is handed back.
+  tracker_config.solve_constrained_directions = false;
+  const TrackResult plain = Tracker(tracker_config).track(wall, camera, volume, guess);
+  EXPECT_EQ(plain.status, TrackStatus::kDegenerate);
+  EXPECT_FALSE(plain.tracked());
+  EXPECT_TRUE(plain.T_W_C.isApprox(guess));
+}
+
+TEST(Tracker, ConstrainedDirectionsChangeNothingWhereTheGeometryConstrainsAll) {
+  const PinholeCamera camera = test::testCamera();
+  const Eigen::Isometry3d T_W_C = synthetic::cameraPose(synthetic::Motion::kDesk, 0.0, 10.0);
+  const DepthImage depth = test::renderRoom(T_W_C, camera);
+  TsdfVolume volume(test::roomVolume());
+  Integrator(IntegratorConfig{}).integrate(depth, camera, T_W_C, &volume);
+  const Eigen::Isometry3d guess = test::perturbed(T_W_C, 0.02, 0.02);
+  TrackerConfig config;
+  const TrackResult plain = Tracker(config).track(depth, camera, volume, guess);
+  config.solve_constrained_directions = true;
+  const TrackResult constrained = Tracker(config).track(depth, camera, volume, guess);
+  ASSERT_TRUE(plain.ok()) << plain.message;
+  ASSERT_TRUE(constrained.ok()) << constrained.message;
+  EXPECT_EQ(constrained.constrained_rank, 6);
+  EXPECT_LT((plain.T_W_C.translation() - constrained.T_W_C.translation()).norm(), 1e-5);
+}
+
 TEST(TrackerConfig, RejectsEveryInvalidValue) {
   TrackerConfig config;
   config.levels = {{0, 5}, {2, -1}};

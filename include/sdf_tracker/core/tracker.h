@@ -37,8 +37,15 @@ struct TrackerConfig {
   double convergence_threshold = 1e-4;
   /// Fewer valid points than this at any iteration: kTooFewPoints.
   int min_valid_points = 200;
-  /// Smallest/largest eigenvalue of the scaled normal equations below this: kDegenerate.
+  /// An eigenvalue of the scaled normal equations below this fraction of the largest marks a
+  /// direction the geometry does not constrain (e.g. sliding along a wall): kDegenerate.
   double min_inverse_condition = 1e-4;
+  /// What a degenerate frame does. false (the paper): it fails, the pose is held and nothing is
+  /// fused. true: each Gauss-Newton step solves only the directions the geometry constrains (the
+  /// eigenvectors above min_inverse_condition), the others keep the guess, i.e. the motion model's
+  /// prediction; the frame is still reported kDegenerate with its constrained rank, but its pose
+  /// is used and fused.
+  bool solve_constrained_directions = false;
   /// A final step |delta xi| larger than this: kNotConverged.
   double max_final_step = 5e-3;
   /// Motion from the guess beyond either limit: kDiverged (larger than a hand-held camera moves
@@ -54,6 +61,7 @@ enum class TrackStatus {
   kNotConverged,  ///< iterations ran out with the pose still moving.
   kTooFewPoints,  ///< too few points landed in observed parts of the field.
   kDegenerate,    ///< the geometry does not constrain all six degrees of freedom (e.g. one plane).
+                  ///< With solve_constrained_directions the pose is still estimated (see tracked()).
   kDiverged,      ///< the solution ran away or became non-finite.
   kBadInput,      ///< the depth image is empty, of the wrong size, or holds no measurement.
 };
@@ -69,10 +77,18 @@ struct TrackResult {
   double rms_residual_m = 0.0;  ///< RMS of D at the valid points of the last iteration.
   int valid_points = 0;         ///< points used in the last iteration.
   double inverse_condition = 0.0;
+  /// How many of the six directions the geometry constrained in the last iteration.
+  int constrained_rank = 0;
+  /// T_W_C is an estimate (ok, not converged, or degenerate solved in its constrained
+  /// directions), not the guess handed back.
+  bool pose_estimated = false;
   double final_step = 0.0;  ///< |delta xi| of the last iteration.
   std::string message;      ///< why, in words, when status != kOk.
 
   bool ok() const { return status == TrackStatus::kOk; }
+  /// The frame's pose can be used and the frame fused: ok, or degenerate with its constrained
+  /// directions solved and the rest predicted.
+  bool tracked() const { return ok() || (status == TrackStatus::kDegenerate && pose_estimated); }
 };
 
 /// Registers a depth image directly against the TSDF (Section III): Gauss-Newton on the sum of
