@@ -8,8 +8,8 @@
 #   bash bench/camera_replay.sh [SEQUENCE_DIR ...]   (default: fr1_xyz and redkitchen from SDF_TRACKER_DATA)
 # Writes bench/results/<date>_cameras.md. No test asserts these figures.
 set -euo pipefail
-repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-data="${SDF_TRACKER_DATA:-$repo/../shared/data}"
+# shellcheck source=common.sh
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 work="$repo/build/bench/cameras"
 report="$repo/bench/results/$(date +%Y-%m-%d)_cameras.md"
 mkdir -p "$work" "$(dirname "$report")"
@@ -17,12 +17,7 @@ mkdir -p "$work" "$(dirname "$report")"
 # shellcheck source=../scripts/workspace.sh
 source "$repo/scripts/workspace.sh"
 
-sequences=("$@")
-if [ ${#sequences[@]} -eq 0 ]; then
-  for s in tum_fr1_xyz 7scenes/redkitchen; do
-    if [ -f "$data/$s/depth.txt" ]; then sequences+=("$data/$s"); else echo "SKIPPED: $data/$s not found"; fi
-  done
-fi
+real_sequences "$@"
 
 # "ATE RMSE x m" of an estimate against a reference trajectory; the converters shift stamps that
 # start below 1 s by 1 s.

@@ -10,8 +10,8 @@
 #   RUNS="idle busy rviz" picks the runs (default: idle busy); rviz runs with rviz on, under xvfb-run.
 # Writes bench/results/<date>_node.md (<date>_node_<runs>.md with RUNS). No test asserts these figures.
 set -euo pipefail
-repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-data="${SDF_TRACKER_DATA:-$repo/../shared/data}"
+# shellcheck source=common.sh
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 work="$repo/build/bench/node"
 runs_name="${RUNS:-}"
 report="$repo/bench/results/$(date +%Y-%m-%d)_node${runs_name:+_${runs_name// /_}}.md"
@@ -20,12 +20,7 @@ mkdir -p "$work" "$(dirname "$report")"
 # shellcheck source=../scripts/workspace.sh
 source "$repo/scripts/workspace.sh"
 
-sequences=("$@")
-if [ ${#sequences[@]} -eq 0 ]; then
-  for s in tum_fr1_xyz 7scenes/redkitchen; do
-    if [ -f "$data/$s/depth.txt" ]; then sequences+=("$data/$s"); else echo "SKIPPED: $data/$s not found"; fi
-  done
-fi
+real_sequences "$@"
 
 roscore_pid=""
 cleanup() {

@@ -1,6 +1,7 @@
 #include "sdf_tracker/core/depth_image.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace sdf_tracker {
 
@@ -16,6 +17,15 @@ DepthImage DepthImage::fromRaw16(const uint16_t* raw, int width, int height, dou
     image.data_m_[i] = raw[i] == 0 ? 0.0f : static_cast<float>(raw[i]) * scale;
   }
   return image;
+}
+
+std::vector<uint16_t> DepthImage::toRaw16(double depth_factor) const {
+  std::vector<uint16_t> raw(data_m_.size());
+  for (size_t i = 0; i < raw.size(); ++i) {
+    const double value = isMeasurement(data_m_[i]) ? std::round(data_m_[i] * depth_factor) : 0.0;
+    raw[i] = static_cast<uint16_t>(value > 65535.0 ? 0.0 : value);
+  }
+  return raw;
 }
 
 }  // namespace sdf_tracker

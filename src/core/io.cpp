@@ -145,14 +145,8 @@ DepthImage readDepthPng(const std::string& path, double depth_factor, int expect
 }
 
 void writeDepthPng(const std::string& path, const DepthImage& depth, double depth_factor) {
-  cv::Mat raw(depth.height(), depth.width(), CV_16UC1);
-  for (int v = 0; v < depth.height(); ++v) {
-    for (int u = 0; u < depth.width(); ++u) {
-      const float z = depth.at(u, v);
-      const double value = DepthImage::isMeasurement(z) ? std::round(z * depth_factor) : 0.0;
-      raw.at<uint16_t>(v, u) = static_cast<uint16_t>(value > 65535.0 ? 0.0 : value);
-    }
-  }
+  std::vector<uint16_t> values = depth.toRaw16(depth_factor);
+  const cv::Mat raw(depth.height(), depth.width(), CV_16UC1, values.data());
   std::vector<uchar> png;
   if (!cv::imencode(".png", raw, png)) fail(path, "PNG encoding failed");
   AtomicOutput out(path);

@@ -1,5 +1,6 @@
 #include "sdf_tracker/devices/oni_file.h"
 
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
@@ -28,6 +29,7 @@ constexpr uint32_t kUncompressed = ('E' << 24) | ('N' << 16) | ('O' << 8) | 'N';
 constexpr uint64_t kPixelFormatGrey16 = 4;                                       // OpenNI 1.x
 constexpr uint64_t kOniPixelFormatDepth1mm = 100;                                // ONI_PIXEL_FORMAT_DEPTH_1_MM
 constexpr uint32_t kSupportsGrey16 = 1u << 3;                                    // XnSupportedPixelFormats
+constexpr uint64_t kMaxDepth_mm = 10000;
 
 /// Little helper to lay out a record's fields as the format packs them (no padding, host order).
 class Fields {
@@ -55,27 +57,27 @@ class Fields {
 
 }  // namespace
 
-OniDepthWriter::OniDepthWriter(std::string path, const Stream& stream)
-    : path_(std::move(path)), temporary_(path_ + ".partial"), stream_(stream) {
+OniDepthWriter::OniDepthWriter(std::string path, const PinholeCamera& camera, int fps)
+    : path_(std::move(path)), temporary_(path_ + ".partial"), width_(camera.width), height_(camera.height) {
   out_.open(temporary_, std::ios::binary | std::ios::trunc);
   if (!out_) throw std::runtime_error("cannot write " + temporary_);
   writeFileHeader(std::numeric_limits<uint64_t>::max());
   node_added_position_ = position();
   writeNodeAdded(std::numeric_limits<uint32_t>::max(), std::numeric_limits<uint64_t>::max(), 0);
 
-  const uint32_t frame_bytes = static_cast<uint32_t>(stream_.width) * stream_.height * 2;
+  const uint32_t frame_bytes = static_cast<uint32_t>(width_) * height_ * 2;
   writeIntProperty("oniRequiredFrameSize", frame_bytes);
   writeIntProperty("xnIsGenerating", 1);
-  writeIntProperty("xnDeviceMaxDepth", stream_.max_depth_mm);
-  const uint32_t mode[3] = {static_cast<uint32_t>(stream_.width), static_cast<uint32_t>(stream_.height),
-                            static_cast<uint32_t>(stream_.fps)};
+  writeIntProperty("xnDeviceMaxDepth", kMaxDepth_mm);
+  const uint32_t mode[3] = {static_cast<uint32_t>(width_), static_cast<uint32_t>(height_), static_cast<uint32_t>(fps)};
   writeIntProperty("xnSupportedMapOutputModesCount", 1);
   writeProperty(kGeneralProperty, "xnSupportedMapOutputModes", mode, sizeof(mode));
   writeProperty(kGeneralProperty, "xnMapOutputMode", mode, sizeof(mode));
   writeProperty(kGeneralProperty, "xnSupportedPixelFormats", &kSupportsGrey16, sizeof(kSupportsGrey16));
   writeIntProperty("xnPixelFormat", kPixelFormatGrey16);
   writeIntProperty("oniPixelFormat", kOniPixelFormatDepth1mm);
-  const double fov[2] = {stream_.horizontal_fov_rad, stream_.vertical_fov_rad};
+  // OpenNI describes intrinsics by the field of view; the principal point goes to the calibration file.
+  const double fov[2] = {2.0 * std::atan(camera.width / (2.0 * camera.fx)), 2.0 * std::atan(camera.height / (2.0 * camera.fy))};
   writeProperty(kGeneralProperty, "xnFOV", fov, sizeof(fov));
   // OniFile hands out no frame of a stream without a cropping state, so it is recorded (off), and
   // the mirroring state (off) with it.
@@ -144,9 +146,9 @@ void OniDepthWriter::writeIntProperty(const std::string& name, uint64_t value) {
 }
 
 void OniDepthWriter::addFrame(uint64_t timestamp_us, const std::vector<uint16_t>& depth_mm) {
-  if (depth_mm.size() != static_cast<size_t>(stream_.width) * stream_.height) {
-    throw std::invalid_argument("a frame of the recording has " + std::to_string(stream_.width) + "x" +
-                                std::to_string(stream_.height) + " depths, got " + std::to_string(depth_mm.size()));
+  if (depth_mm.size() != static_cast<size_t>(width_) * height_) {
+    throw std::invalid_argument("a frame of the recording has " + std::to_string(width_) + "x" +
+                                std::to_string(height_) + " depths, got " + std::to_string(depth_mm.size()));
   }
   if (!frames_.empty() && timestamp_us <= last_timestamp_us_) {
     throw std::invalid_argument("frame timestamps must increase (" + std::to_string(timestamp_us) + " us after " +

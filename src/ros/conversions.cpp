@@ -74,6 +74,19 @@ sdf_tracker::PinholeCamera toCamera(const sensor_msgs::CameraInfo& info) {
   return camera;
 }
 
+sensor_msgs::CameraInfo toCameraInfo(const sdf_tracker::PinholeCamera& c, const std_msgs::Header& header) {
+  sensor_msgs::CameraInfo info;
+  info.header = header;
+  info.width = static_cast<uint32_t>(c.width);
+  info.height = static_cast<uint32_t>(c.height);
+  info.distortion_model = "plumb_bob";
+  info.D.assign(5, 0.0);
+  info.K = {c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1};
+  info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  info.P = {c.fx, 0, c.cx, 0, 0, c.fy, c.cy, 0, 0, 0, 1, 0};
+  return info;
+}
+
 geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T) {
   geometry_msgs::Pose pose;
   const Eigen::Quaterniond q(T.linear());

@@ -1,7 +1,6 @@
 #include "sdf_tracker/ros/depth_camera_publisher.h"
 
 #include <cmath>
-#include <cstring>
 #include <filesystem>
 #include <limits>
 
@@ -10,6 +9,7 @@
 #include <tf2/LinearMath/Quaternion.h>
 
 #include "sdf_tracker/devices/recording.h"
+#include "sdf_tracker/ros/conversions.h"
 
 namespace sdf_tracker_ros {
 
@@ -43,7 +43,7 @@ geometry_msgs::TransformStamped transform(const std::string& parent, const std::
 }  // namespace
 
 DepthCameraPublisher::DepthCameraPublisher(const ros::NodeHandle& camera_nh, const ros::NodeHandle& pnh)
-    : camera_nh_(camera_nh), it_(camera_nh) {
+    : it_(camera_nh) {
   std::string camera = camera_nh.getNamespace();
   camera = camera.substr(camera.find_last_of('/') + 1);
   registered_ = pnh.param("depth_registration", false);
@@ -56,7 +56,7 @@ DepthCameraPublisher::DepthCameraPublisher(const ros::NodeHandle& camera_nh, con
                                                                           "depth", url);
   raw_pub_ = it_.advertise(prefix + "/image_raw", 1);
   metric_pub_ = it_.advertise(prefix + "/image", 1);
-  info_pub_ = camera_nh_.advertise<sensor_msgs::CameraInfo>(prefix + "/camera_info", 1);
+  info_pub_ = ros::NodeHandle(camera_nh).advertise<sensor_msgs::CameraInfo>(prefix + "/camera_info", 1);
   if (pnh.param("publish_tf", true)) publishFrames(camera);
 }
 
@@ -71,6 +71,11 @@ void DepthCameraPublisher::publishFrames(const std::string& camera) {
 
 ros::NodeHandle DepthCameraPublisher::cameraNamespace() {
   return ros::this_node::getNamespace() == "/" ? ros::NodeHandle("camera") : ros::NodeHandle();
+}
+
+void DepthCameraPublisher::finishRecording(const char* driver, size_t frames) {
+  ROS_INFO("%s: the recording ended after %zu frames", driver, frames);
+  ros::WallDuration(kLingerAfterRecording_s).sleep();
 }
 
 bool DepthCameraPublisher::hasSubscribers() const {
@@ -99,16 +104,7 @@ sensor_msgs::CameraInfo DepthCameraPublisher::cameraInfo(int width, int height,
       warned_size_ = true;
     }
   }
-  const sdf_tracker::PinholeCamera c = nominal.width == width ? nominal : nominal.scaledTo(width, height);
-  sensor_msgs::CameraInfo info;
-  info.width = width;
-  info.height = height;
-  info.distortion_model = "plumb_bob";
-  info.D.assign(5, 0.0);
-  info.K = {c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1};
-  info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  info.P = {c.fx, 0, c.cx, 0, 0, c.fy, c.cy, 0, 0, 0, 1, 0};
-  return info;
+  return toCameraInfo(nominal.width == width ? nominal : nominal.scaledTo(width, height), std_msgs::Header());
 }
 
 void DepthCameraPublisher::publish(const uint16_t* depth_mm, int width, int height, int stride, const ros::Time& stamp,
@@ -119,20 +115,21 @@ void DepthCameraPublisher::publish(const uint16_t* depth_mm, int width, int heig
   sensor_msgs::CameraInfo info = cameraInfo(width, height, nominal);
   info.header = header;
 
-  const auto raw = boost::make_shared<sensor_msgs::Image>();
-  raw->header = header;
-  raw->width = width;
-  raw->height = height;
-  raw->encoding = sensor_msgs::image_encodings::TYPE_16UC1;
-  raw->step = width * sizeof(uint16_t);
-  raw->data.resize(static_cast<size_t>(raw->step) * height);
-  const auto metric = boost::make_shared<sensor_msgs::Image>();
-  metric->header = header;
-  metric->width = width;
-  metric->height = height;
-  metric->encoding = sensor_msgs::image_encodings::TYPE_32FC1;
-  metric->step = width * sizeof(float);
-  metric->data.resize(static_cast<size_t>(metric->step) * height);
+  // Both images in one pass with no intermediate buffer: this runs for every frame beside the
+  // tracker, and going through DepthImage (fromRaw16 + toImageMsg) cost 0.4-5.9 ms a VGA frame
+  // against 0.14 ms, mostly in allocating and faulting in the extra 1.2 MB.
+  auto image = [&](const std::string& encoding, size_t bytes_per_pixel) {
+    const auto msg = boost::make_shared<sensor_msgs::Image>();
+    msg->header = header;
+    msg->width = width;
+    msg->height = height;
+    msg->encoding = encoding;
+    msg->step = static_cast<uint32_t>(width * bytes_per_pixel);
+    msg->data.resize(static_cast<size_t>(msg->step) * height);
+    return msg;
+  };
+  const auto raw = image(sensor_msgs::image_encodings::TYPE_16UC1, sizeof(uint16_t));
+  const auto metric = image(sensor_msgs::image_encodings::TYPE_32FC1, sizeof(float));
   auto* raw_out = reinterpret_cast<uint16_t*>(raw->data.data());
   auto* metric_out = reinterpret_cast<float*>(metric->data.data());
   for (int v = 0; v < height; ++v) {

@@ -7,7 +7,7 @@
 //
 // Depth: the device sends 11-bit disparities; they become millimetres through libfreenect's
 // depth model with the device's own zero-plane calibration when the library provides it, else
-// (fakenect) with the Kinect v1's factory values. With ~depth_registration, libfreenect's
+// (fakenect) with values typical of Kinect v1 units. With ~depth_registration, libfreenect's
 // registered millimetre mode is used instead.
 //
 // Replay: under libfreenect's fakenect (FAKENECT_PATH set, and its library first on
@@ -34,9 +34,6 @@ namespace {
 
 namespace dev = sdf_tracker::devices;
 
-constexpr double kReopenInterval_s = 1.0;
-/// After the last frame of a recording, time for subscribers to take it before the node ends.
-constexpr double kLingerAfterRecording_s = 1.0;
 
 /// libfreenect's device calibration, when the library in use has it: fakenect's stand-in
 /// library does not, so the function is looked up at run time rather than linked.
@@ -136,18 +133,18 @@ class KinectDriver {
     }
     freenect_set_depth_mode(device_, *mode);
     mode_ = *mode;
-    const std::optional<dev::KinectZeroPlane> zero_plane = deviceZeroPlane(device_);
-    zero_plane_ = zero_plane.value_or(dev::KinectZeroPlane{});
-    disparity_ = dev::KinectDisparityTable(zero_plane_);
+    const std::optional<dev::KinectZeroPlane> device_zero_plane = deviceZeroPlane(device_);
+    const dev::KinectZeroPlane zero_plane = device_zero_plane.value_or(dev::KinectZeroPlane{});
+    disparity_ = dev::KinectDisparityTable(zero_plane);
     nominal_.width = mode->width;
     nominal_.height = mode->height;
-    nominal_.fx = nominal_.fy = zero_plane_.focalLength640_px() * mode->width / 640.0;
+    nominal_.fx = nominal_.fy = zero_plane.focalLength640_px() * mode->width / 640.0;
     nominal_.cx = (mode->width - 1) / 2.0;
     nominal_.cy = (mode->height - 1) / 2.0;
     freenect_set_user(device_, this);
     freenect_set_depth_callback(device_, &KinectDriver::onDepth);
     ROS_INFO("kinect_depth_publisher: Kinect open, %dx%d %s depth, %s calibration", mode->width, mode->height,
-             publisher_.registered() ? "registered" : "11-bit", zero_plane ? "the device's" : "factory zero-plane");
+             publisher_.registered() ? "registered" : "11-bit", device_zero_plane ? "the device's" : "typical zero-plane");
     return true;
   }
 
@@ -177,15 +174,14 @@ class KinectDriver {
       timeval timeout{0, 100000};
       if (freenect_process_events_timeout(context_, &timeout) >= 0) continue;
       if (!replay_path_.empty()) {
-        ROS_INFO("kinect_depth_publisher: the recording ended after %zu frames", frames_);
-        ros::WallDuration(kLingerAfterRecording_s).sleep();
+        publisher_.finishRecording("kinect_depth_publisher", frames_);
         return 0;
       }
       ROS_ERROR("kinect_depth_publisher: lost the Kinect after %zu frames; trying to re-open it every %.0f s",
-                frames_, kReopenInterval_s);
+                frames_, sdf_tracker_ros::DepthCameraPublisher::kReopenInterval_s);
       close();
       while (ros::ok() && device_ == nullptr) {
-        ros::WallDuration(kReopenInterval_s).sleep();
+        ros::WallDuration(sdf_tracker_ros::DepthCameraPublisher::kReopenInterval_s).sleep();
         if (freenect_num_devices(context_) > 0 && open()) ROS_INFO("kinect_depth_publisher: the Kinect is back");
       }
     }
@@ -222,7 +218,6 @@ class KinectDriver {
   freenect_context* context_ = nullptr;
   freenect_device* device_ = nullptr;
   freenect_frame_mode mode_{};
-  dev::KinectZeroPlane zero_plane_;
   dev::KinectDisparityTable disparity_;
   sdf_tracker::PinholeCamera nominal_;
   std::vector<uint16_t> depth_mm_;

@@ -24,8 +24,6 @@
 namespace {
 
 constexpr int kFrameTimeout_ms = 2000;
-constexpr double kReopenInterval_s = 1.0;
-constexpr double kLingerAfterRecording_s = 1.0;
 
 class OpenNI2Driver {
  public:
@@ -155,8 +153,7 @@ class OpenNI2Driver {
           depth_.readFrame(&frame) == openni::STATUS_OK && frame.isValid()) {
         publish(frame);
         if (playback_ != nullptr && frames_ >= static_cast<size_t>(frames_in_recording_)) {
-          ROS_INFO("openni2_depth_publisher: the recording ended after %zu frames", frames_);
-          ros::WallDuration(kLingerAfterRecording_s).sleep();
+          publisher_.finishRecording("openni2_depth_publisher", frames_);
           return 0;
         }
         continue;
@@ -167,10 +164,10 @@ class OpenNI2Driver {
         return 1;
       }
       ROS_ERROR("openni2_depth_publisher: no depth frame for %d ms (%s); re-opening the camera every %.0f s",
-                kFrameTimeout_ms, openni::OpenNI::getExtendedError(), kReopenInterval_s);
+                kFrameTimeout_ms, openni::OpenNI::getExtendedError(), sdf_tracker_ros::DepthCameraPublisher::kReopenInterval_s);
       close();
       while (ros::ok()) {
-        ros::WallDuration(kReopenInterval_s).sleep();
+        ros::WallDuration(sdf_tracker_ros::DepthCameraPublisher::kReopenInterval_s).sleep();
         if (device_.open(device_id_.empty() ? openni::ANY_DEVICE : device_id_.c_str()) == openni::STATUS_OK &&
             depth_.create(device_, openni::SENSOR_DEPTH) == openni::STATUS_OK && configureLiveCamera()) {
           ROS_INFO("openni2_depth_publisher: the camera is back");

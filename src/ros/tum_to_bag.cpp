@@ -88,19 +88,6 @@ geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T, const ro
   return tf;
 }
 
-sensor_msgs::CameraInfo toCameraInfo(const st::PinholeCamera& c, const std_msgs::Header& header) {
-  sensor_msgs::CameraInfo info;
-  info.header = header;
-  info.width = c.width;
-  info.height = c.height;
-  info.distortion_model = "plumb_bob";
-  info.D.assign(5, 0.0);
-  info.K = {c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1};
-  info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  info.P = {c.fx, 0, c.cx, 0, 0, c.fy, c.cy, 0, 0, 0, 1, 0};
-  return info;
-}
-
 /// "timestamp rest..." lines of an optional TUM list file ('#' comments); empty if it is absent.
 std::vector<std::pair<double, std::string>> readTimedLines(const std::string& path) {
   std::vector<std::pair<double, std::string>> lines;
@@ -200,7 +187,7 @@ int run(int argc, char** argv) {
         st::PinholeCamera camera = sequence.camera();
         camera.width = static_cast<int>(image.width), camera.height = static_cast<int>(image.height);
         bag.write("/camera/rgb/image_color", header.stamp, image);
-        bag.write("/camera/rgb/camera_info", header.stamp, toCameraInfo(camera, header));
+        bag.write("/camera/rgb/camera_info", header.stamp, sdf_tracker_ros::toCameraInfo(camera, header));
         ++colour_index;
       }
     };
@@ -211,7 +198,7 @@ int run(int argc, char** argv) {
       header.stamp = stamp(sequence.timestamp(i));
       header.frame_id = "/openni_depth_optical_frame";
       bag.write("/camera/depth/image", header.stamp, sdf_tracker_ros::toImageMsg(sequence.depth(i), header));
-      bag.write("/camera/depth/camera_info", header.stamp, toCameraInfo(sequence.camera(), header));
+      bag.write("/camera/depth/camera_info", header.stamp, sdf_tracker_ros::toCameraInfo(sequence.camera(), header));
     }
     writeUpTo(t_end + 0.1);  // the ground truth and chain just past the last frame
     bag.close();

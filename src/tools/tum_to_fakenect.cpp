@@ -20,7 +20,7 @@ const char* kUsage = R"(usage: tum_to_fakenect SEQUENCE_DIR DUMP_DIR [--frames N
 
 Writes a fakenect recording (libfreenect's replay format: INDEX.txt and one PGM per frame) of a
 640x480 TUM-layout depth sequence: each depth becomes the raw 11-bit disparity a Kinect v1 sends
-for it (libfreenect's depth model with the factory zero-plane values), at the sequence's stamps
+for it (libfreenect's depth model with typical Kinect v1 zero-plane values), at the sequence's stamps
 (shifted by 1 s if they start below 1 s, as ROS time 0 means "no time"). The sequence's
 intrinsics go to DUMP_DIR/depth_camera_info.yaml, where kinect.launch finds them.
 DUMP_DIR must not exist; it appears only when the recording is complete.
@@ -44,20 +44,17 @@ int run(int argc, char** argv) {
   const dev::KinectDisparityTable table;
   dev::FakenectDumpWriter writer(args.positional(1));
   size_t out_of_range = 0, measured = 0;
-  std::vector<uint16_t> disparities(static_cast<size_t>(camera.width) * camera.height);
+  std::vector<uint16_t> disparities;
   for (size_t i = 0; i < sequence.size(); ++i) {
-    const st::DepthImage depth = sequence.depth(i);
-    for (int v = 0; v < camera.height; ++v) {
-      for (int u = 0; u < camera.width; ++u) {
-        const float z = depth.at(u, v);
-        uint16_t disparity = dev::kKinectNoDisparity;
-        if (std::isfinite(z) && z > 0.0f) {
-          ++measured;
-          disparity = table.fromMillimetres(static_cast<uint16_t>(std::min(65535L, std::lround(z * 1000.0f))));
-          if (disparity == dev::kKinectNoDisparity) ++out_of_range;
-        }
-        disparities[static_cast<size_t>(v) * camera.width + u] = disparity;
+    disparities = sequence.depth(i).toRaw16(1000.0);  // millimetres, then what a Kinect sends for them
+    for (uint16_t& value : disparities) {
+      if (value == 0) {
+        value = dev::kKinectNoDisparity;
+        continue;
       }
+      ++measured;
+      value = table.fromMillimetres(value);
+      if (value == dev::kKinectNoDisparity) ++out_of_range;
     }
     writer.addDepth(sequence.timestamp(i) + offset_s, disparities);
   }

@@ -35,20 +35,10 @@ int run(int argc, char** argv) {
   const st::TumSequence sequence = st::tools::openSequence(args);
   const st::PinholeCamera& camera = sequence.camera();
   const double offset_s = dev::rosStampOffset(sequence);
-  dev::OniDepthWriter::Stream stream;
-  stream.width = camera.width;
-  stream.height = camera.height;
-  stream.horizontal_fov_rad = 2.0 * std::atan(camera.width / (2.0 * camera.fx));
-  stream.vertical_fov_rad = 2.0 * std::atan(camera.height / (2.0 * camera.fy));
-  dev::OniDepthWriter writer(args.positional(1), stream);
-  std::vector<uint16_t> depth_mm(static_cast<size_t>(camera.width) * camera.height);
+  dev::OniDepthWriter writer(args.positional(1), camera);
   for (size_t i = 0; i < sequence.size(); ++i) {
-    const st::DepthImage depth = sequence.depth(i);
-    for (size_t p = 0; p < depth_mm.size(); ++p) {
-      const float z = depth.data()[p];
-      depth_mm[p] = std::isfinite(z) && z > 0.0f ? static_cast<uint16_t>(std::min(65535L, std::lround(z * 1000.0f))) : 0;
-    }
-    writer.addFrame(static_cast<uint64_t>(std::llround((sequence.timestamp(i) + offset_s) * 1e6)), depth_mm);
+    writer.addFrame(static_cast<uint64_t>(std::llround((sequence.timestamp(i) + offset_s) * 1e6)),
+                    sequence.depth(i).toRaw16(1000.0));
   }
   dev::writeCalibrationFile(dev::calibrationFileFor(args.positional(1)), camera, "depth");
   writer.finish();

@@ -88,11 +88,7 @@ class NodeTest : public ::testing::Test {
   sdf_tracker::TrackingStatus publishAndWait(const sensor_msgs::Image& image, const st::PinholeCamera& camera) {
     std::unique_lock<std::mutex> lock(mutex_);
     const size_t before = statuses_.size();
-    sensor_msgs::CameraInfo info;
-    info.header = image.header;
-    info.width = camera.width;
-    info.height = camera.height;
-    info.K = {camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1};
+    const sensor_msgs::CameraInfo info = sdf_tracker_ros::toCameraInfo(camera, image.header);
     // Connections come up one by one (the node has several subscribers per topic): re-send the
     // pair until the node answers. A pair it already took is dropped by stamp, never tracked twice.
     bool arrived = false;

@@ -67,6 +67,23 @@ TEST(Conversions, UnreadableImagesNameTheProblem) {
   EXPECT_DOUBLE_EQ(toCamera(info).cx, 319.5);
 }
 
+TEST(Conversions, CameraInfoRoundTripsThroughTheCamera) {
+  const sdf_tracker::PinholeCamera camera = sdf_tracker::PinholeCamera::tumFreiburg1();
+  std_msgs::Header header;
+  header.frame_id = "camera_depth_optical_frame";
+  const sensor_msgs::CameraInfo info = toCameraInfo(camera, header);
+  EXPECT_EQ(info.header.frame_id, "camera_depth_optical_frame");
+  EXPECT_EQ(info.distortion_model, "plumb_bob");
+  EXPECT_EQ(info.P[2], camera.cx);
+  const sdf_tracker::PinholeCamera back = toCamera(info);
+  EXPECT_EQ(back.width, camera.width);
+  EXPECT_EQ(back.height, camera.height);
+  EXPECT_DOUBLE_EQ(back.fx, camera.fx);
+  EXPECT_DOUBLE_EQ(back.fy, camera.fy);
+  EXPECT_DOUBLE_EQ(back.cx, camera.cx);
+  EXPECT_DOUBLE_EQ(back.cy, camera.cy);
+}
+
 TEST(Reconfigure, TheCfgListsExactlyTheLiveRowsOfTheTableWithTheirTypesAndDefaultsAndNoClampingRange) {
   namespace st = sdf_tracker;
   const st::Settings defaults = st::preset("default");

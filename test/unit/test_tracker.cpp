@@ -108,36 +108,37 @@ TEST_F(TrackerFixture, FramesOutsideTheMapHaveTooFewPoints) {
   EXPECT_TRUE(result.T_W_C.isApprox(far_away));
 }
 
-TEST(Tracker, ASinglePlaneIsReportedAsDegenerate) {
+/// A single wall 2 m ahead of the camera at the origin (facing +z), mapped from there: distance
+/// and tilt are constrained, sliding along the wall and rolling about its normal are not.
+class WallFixture : public ::testing::Test {
+ protected:
+  static DepthImage renderWall(const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C) {
+    synthetic::NoiseModel exact;
+    exact.enabled = false;
+    return synthetic::Scene::singleWall().render(camera, T_W_C, exact, 0);
+  }
+  static VolumeConfig wallVolume() {
+    VolumeConfig config;
+    config.dims = Eigen::Vector3i(200, 160, 60);
+    config.voxel_size_m = 0.02;
+    config.origin_W = Eigen::Vector3d(-2.0, -1.6, 1.4);
+    return config;
+  }
+  void SetUp() override { Integrator(IntegratorConfig{}).integrate(wall, camera, T_W_C, &volume); }
+
   const PinholeCamera camera = test::testCamera();
-  synthetic::NoiseModel exact;
-  exact.enabled = false;
   const Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
-  const DepthImage wall = synthetic::Scene::singleWall().render(camera, T_W_C, exact, 0);
-  VolumeConfig config;
-  config.dims = Eigen::Vector3i(200, 160, 60);
-  config.voxel_size_m = 0.02;
-  config.origin_W = Eigen::Vector3d(-2.0, -1.6, 1.4);
-  TsdfVolume volume(config);
-  Integrator(IntegratorConfig{}).integrate(wall, camera, T_W_C, &volume);
+  const DepthImage wall = renderWall(camera, T_W_C);
+  TsdfVolume volume{wallVolume()};
+};
+
+TEST_F(WallFixture, ASinglePlaneIsReportedAsDegenerate) {
   const TrackResult result = Tracker(TrackerConfig{}).track(wall, camera, volume, test::perturbed(T_W_C, 0.01, 0.01));
   EXPECT_EQ(result.status, TrackStatus::kDegenerate) << result.message << " inverse condition " << result.inverse_condition;
   EXPECT_TRUE(result.T_W_C.isApprox(test::perturbed(T_W_C, 0.01, 0.01))) << "a degenerate frame must hold the pose";
 }
 
-TEST(Tracker, ASinglePlaneIsSolvedInTheThreeDirectionsItConstrains) {
-  const PinholeCamera camera = test::testCamera();
-  synthetic::NoiseModel exact;
-  exact.enabled = false;
-  const Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();  // facing the wall 2 m ahead along z
-  const DepthImage wall = synthetic::Scene::singleWall().render(camera, T_W_C, exact, 0);
-  VolumeConfig config;
-  config.dims = Eigen::Vector3i(200, 160, 60);
-  config.voxel_size_m = 0.02;
-  config.origin_W = Eigen::Vector3d(-2.0, -1.6, 1.4);
-  TsdfVolume volume(config);
-  Integrator(IntegratorConfig{}).integrate(wall, camera, T_W_C, &volume);
-
+TEST_F(WallFixture, ASinglePlaneIsSolvedInTheThreeDirectionsItConstrains) {
   // The guess is off in every direction: along the wall (x, y) and about its normal (z), which
   // the wall cannot tell, and in distance and tilt, which it can.
   Eigen::Isometry3d guess = T_W_C;

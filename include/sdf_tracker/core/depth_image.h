@@ -30,6 +30,9 @@ class DepthImage {
 
   /// Converts raw 16-bit depth (value / depth_factor metres, 0 = none) to metres, once, at the edge.
   static DepthImage fromRaw16(const uint16_t* raw, int width, int height, double depth_factor);
+  /// The inverse, row by row: round(metres * depth_factor); 0 where there is no measurement or the
+  /// value does not fit in 16 bits.
+  std::vector<uint16_t> toRaw16(double depth_factor) const;
 
  private:
   int width_ = 0;

@@ -12,8 +12,9 @@ constexpr uint16_t kKinectNoDisparity = 2047;
 constexpr uint16_t kKinectMaxDepth_mm = 10000;
 
 /// The zero-plane calibration a Kinect v1 stores in its firmware, in libfreenect's units
-/// (freenect_zero_plane_info and const_shift). The defaults are the factory values libfreenect
-/// reports for Kinect v1 units; a real device's own are read by the driver when the library can.
+/// (freenect_zero_plane_info and const_shift). Each unit stores its own; the defaults are values
+/// commonly reported for Kinect v1 units (not read from a device here), used where the library
+/// cannot read them (fakenect) and by tum_to_fakenect. The driver reads a real device's own.
 struct KinectZeroPlane {
   double reference_distance_cm = 120.0;   ///< zero plane distance
   double reference_pixel_size_cm = 0.1042;  ///< zero plane pixel size

@@ -6,26 +6,20 @@
 #include <string>
 #include <vector>
 
+#include "sdf_tracker/core/camera.h"
+
 namespace sdf_tracker::devices {
 
 /// Writes an OpenNI recording (.oni) of one depth stream (16-bit millimetres, uncompressed), in
 /// the layout OpenNI 2's own Recorder writes and its OniFile driver plays: a file header, the
-/// stream's properties (video mode, pixel format, field of view), one record per frame with its
+/// stream's properties (video mode, pixel format, the camera's field of view), one record per frame with its
 /// timestamp in microseconds, a seek table and an end record. The file is written to
 /// "<path>.partial" and renamed by finish(): a failed conversion leaves no playable file.
 /// Throws std::runtime_error naming the file on any failure.
 class OniDepthWriter {
  public:
-  struct Stream {
-    int width = 640;
-    int height = 480;
-    int fps = 30;
-    double horizontal_fov_rad = 1.0225;
-    double vertical_fov_rad = 0.7946;
-    uint16_t max_depth_mm = 10000;
-  };
-
-  OniDepthWriter(std::string path, const Stream& stream);
+  /// A stream of the camera's size at `fps` frames per second.
+  OniDepthWriter(std::string path, const PinholeCamera& camera, int fps = 30);
   ~OniDepthWriter();
   OniDepthWriter(const OniDepthWriter&) = delete;
   OniDepthWriter& operator=(const OniDepthWriter&) = delete;
@@ -48,7 +42,7 @@ class OniDepthWriter {
   void writeFileHeader(uint64_t max_timestamp_us);
 
   std::string path_, temporary_;
-  Stream stream_;
+  int width_, height_;
   std::ofstream out_;
   uint64_t node_added_position_ = 0, last_frame_position_ = 0, last_timestamp_us_ = 0;
   std::map<std::string, uint64_t> last_property_position_;

@@ -24,6 +24,8 @@ sensor_msgs::Image toImageMsg(const sdf_tracker::DepthImage& depth, const std_ms
 
 /// Intrinsics from camera_info (K); throws std::invalid_argument for a zero or non-finite K or size.
 sdf_tracker::PinholeCamera toCamera(const sensor_msgs::CameraInfo& info);
+/// The inverse: camera_info of a pinhole camera without distortion (plumb_bob, D all zero).
+sensor_msgs::CameraInfo toCameraInfo(const sdf_tracker::PinholeCamera& camera, const std_msgs::Header& header);
 
 geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T);
 Eigen::Isometry3d fromPoseMsg(const geometry_msgs::Pose& pose);

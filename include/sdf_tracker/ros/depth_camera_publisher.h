@@ -30,12 +30,19 @@ class DepthCameraPublisher {
   /// <group ns="camera">), or "camera" for a driver started in the root namespace.
   static ros::NodeHandle cameraNamespace();
 
+  /// A live camera that stops sending is re-opened this often until it is back.
+  static constexpr double kReopenInterval_s = 1.0;
+
   bool registered() const { return registered_; }
   /// Someone listens to one of the depth topics: drivers stream only then, as openni2_camera does.
   bool hasSubscribers() const;
   /// A replayed recording brings its own calibration (devices::calibrationFileFor); used unless
   /// ~depth_camera_info_url is set. Says which intrinsics are in use.
   void useRecordingCalibration(const std::string& recording);
+
+  /// A replayed recording has ended: says so and gives subscribers time to take the last frames
+  /// before the driver exits (and, with required="true", ends the launch).
+  void finishRecording(const char* driver, size_t frames);
 
   /// One frame: `height` rows of `width` depths in mm, `stride` values apart.
   void publish(const uint16_t* depth_mm, int width, int height, int stride, const ros::Time& stamp,
@@ -45,7 +52,8 @@ class DepthCameraPublisher {
   sensor_msgs::CameraInfo cameraInfo(int width, int height, const sdf_tracker::PinholeCamera& nominal);
   void publishFrames(const std::string& camera);
 
-  ros::NodeHandle camera_nh_;
+  static constexpr double kLingerAfterRecording_s = 1.0;
+
   bool registered_ = false;
   bool url_given_ = false;
   std::string frame_id_;
