@@ -8,6 +8,16 @@
 
 namespace sdf_tracker {
 
+Eigen::Vector2d LensDistortion::undistort(const Eigen::Vector2d& distorted) const {
+  Eigen::Vector2d ideal = distorted;
+  for (int i = 0; i < 50; ++i) {
+    const Eigen::Vector2d step = distorted - distort(ideal);
+    ideal += step;
+    if (step.squaredNorm() < 1e-20) break;
+  }
+  return ideal;
+}
+
 std::vector<std::string> PinholeCamera::validate() const {
   Violations v;
   v.requirePositive("fx", fx);
@@ -16,6 +26,11 @@ std::vector<std::string> PinholeCamera::validate() const {
   v.requireFinite("cy", cy);
   v.requirePositive("width", width);
   v.requirePositive("height", height);
+  v.requireFinite("k1", distortion.k1);
+  v.requireFinite("k2", distortion.k2);
+  v.requireFinite("p1", distortion.p1);
+  v.requireFinite("p2", distortion.p2);
+  v.requireFinite("k3", distortion.k3);
   return v.list();
 }
 
@@ -39,15 +54,40 @@ PinholeCamera PinholeCamera::scaledTo(int new_width, int new_height) const {
   return scaled;
 }
 
+namespace {
+
+/// TUM RGB-D's published colour-camera calibrations (vision.in.tum.de, "file formats"), 640x480.
+/// freiburg3's images were undistorted by TUM, so it needs no entry.
+struct TumCalibration {
+  double fx, fy, cx, cy;
+  LensDistortion distortion;
+};
+constexpr TumCalibration kTumFreiburg1{517.3, 516.5, 318.6, 255.3, {0.2624, -0.9531, -0.0054, 0.0026, 1.1633}};
+constexpr TumCalibration kTumFreiburg2{520.9, 521.0, 325.1, 249.7, {0.2312, -0.7849, -0.0033, -0.0001, 0.9172}};
+
+}  // namespace
+
 PinholeCamera PinholeCamera::tumFreiburg1() {
   PinholeCamera camera;
-  camera.fx = 517.3;
-  camera.fy = 516.5;
-  camera.cx = 318.6;
-  camera.cy = 255.3;
+  camera.fx = kTumFreiburg1.fx;
+  camera.fy = kTumFreiburg1.fy;
+  camera.cx = kTumFreiburg1.cx;
+  camera.cy = kTumFreiburg1.cy;
   camera.width = 640;
   camera.height = 480;
   return camera;
+}
+
+std::optional<LensDistortion> PinholeCamera::tumPublishedDistortion(const PinholeCamera& camera) {
+  constexpr double kTolerance_px = 0.05;
+  if (camera.width != 640 || camera.height != 480) return std::nullopt;
+  for (const TumCalibration& c : {kTumFreiburg1, kTumFreiburg2}) {
+    if (std::abs(camera.fx - c.fx) <= kTolerance_px && std::abs(camera.fy - c.fy) <= kTolerance_px &&
+        std::abs(camera.cx - c.cx) <= kTolerance_px && std::abs(camera.cy - c.cy) <= kTolerance_px) {
+      return c.distortion;
+    }
+  }
+  return std::nullopt;
 }
 
 }  // namespace sdf_tracker

@@ -97,8 +97,14 @@ void SdfPipeline::updateConfig(const PipelineConfig& candidate) {
   config_ = candidate;
 }
 
-DepthImage SdfPipeline::filterDepth(const DepthImage& depth) const {
-  DepthImage filtered = depth;
+DepthImage SdfPipeline::prepareDepth(const DepthImage& depth, const PinholeCamera& camera) {
+  DepthImage filtered;
+  if (camera.distortion.isZero()) {
+    filtered = depth;
+  } else {
+    if (!undistortion_ || undistortion_->camera() != camera) undistortion_.emplace(camera);
+    filtered = undistortion_->apply(depth);
+  }
   const float lo = static_cast<float>(config_.min_depth_m), hi = static_cast<float>(config_.max_depth_m);
   float* z = filtered.data();
   const size_t n = static_cast<size_t>(filtered.width()) * filtered.height();
@@ -136,7 +142,9 @@ FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCame
     report.track.message = msg.str();
     return report;
   }
-  const DepthImage filtered = filterDepth(depth);
+  const DepthImage filtered = prepareDepth(depth, camera);
+  PinholeCamera ideal_camera = camera;  // the camera of the prepared image
+  ideal_camera.distortion = LensDistortion();
   if (filtered.countMeasurements() == 0) {
     report.track.status = TrackStatus::kBadInput;
     report.track.message = "no pixel holds a depth within [" + std::to_string(config_.min_depth_m) + ", " +
@@ -162,10 +170,10 @@ FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCame
   } else {
     const auto start = std::chrono::steady_clock::now();
     const Eigen::Isometry3d predicted = predictPose(timestamp_s);
-    report.track = tracker_->track(filtered, camera, *volume_, predicted);
+    report.track = tracker_->track(filtered, ideal_camera, *volume_, predicted);
     if (!report.track.tracked() && !predicted.isApprox(T_W_C_)) {
       // The prediction may have led astray (the camera stopped or turned): try from the last pose.
-      TrackResult from_last = tracker_->track(filtered, camera, *volume_, T_W_C_);
+      TrackResult from_last = tracker_->track(filtered, ideal_camera, *volume_, T_W_C_);
       if (from_last.tracked()) report.track = std::move(from_last);
     }
     report.tracking_ms = millisecondsSince(start);
@@ -186,7 +194,7 @@ FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCame
   const double change = std::hypot(motion.translation().norm(), rotationAngle(motion));
   if (report.initialised_map || change >= config_.min_pose_change_to_fuse) {
     const auto start = std::chrono::steady_clock::now();
-    integrator_->integrate(filtered, camera, T_W_C_, volume_.get());
+    integrator_->integrate(filtered, ideal_camera, T_W_C_, volume_.get());
     report.fusion_ms = millisecondsSince(start);
     report.fused = true;
     T_W_C_last_fused_ = T_W_C_;

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "sdf_tracker/core/io.h"
+#include "sdf_tracker/core/tum_sequence.h"
 
 namespace sdf_tracker::synthetic {
 
@@ -148,7 +149,10 @@ DepthImage Scene::render(const PinholeCamera& camera, const Eigen::Isometry3d& T
     std::normal_distribution<double> gaussian(0.0, 1.0);
     std::uniform_real_distribution<double> uniform(0.0, 1.0);
     for (int u = 0; u < camera.width; ++u) {
-      const Eigen::Vector3d ray_C = camera.backProject(u, v, 1.0f).cast<double>();
+      // The ray of the ideal lens that the camera's lens bends onto pixel (u, v).
+      const Eigen::Vector2d ideal =
+          camera.distortion.undistort({(u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy});
+      const Eigen::Vector3d ray_C(ideal.x(), ideal.y(), 1.0);
       const Eigen::Vector3d dir_W = (T_W_C.linear() * ray_C).normalized();
       double t;
       Eigen::Vector3d n_W;
@@ -252,9 +256,13 @@ void writeSequence(const std::string& directory, const SequenceSpec& spec) {
                   << a_C.z() << '\n';
   }
   io::writeTextFile(directory + "/accelerometer.txt", accelerometer.str());
-  intrinsics << "# fx fy cx cy width height depth_factor\n"
+  // The distortion columns are written even when zero: the reader would otherwise take TUM's
+  // published distortion for TUM's intrinsics.
+  const LensDistortion& d = spec.camera.distortion;
+  intrinsics << "# " << TumSequence::kIntrinsicsColumns << "\n"
              << spec.camera.fx << ' ' << spec.camera.fy << ' ' << spec.camera.cx << ' ' << spec.camera.cy << ' '
-             << spec.camera.width << ' ' << spec.camera.height << ' ' << spec.depth_factor << '\n';
+             << spec.camera.width << ' ' << spec.camera.height << ' ' << spec.depth_factor << ' ' << d.k1 << ' '
+             << d.k2 << ' ' << d.p1 << ' ' << d.p2 << ' ' << d.k3 << '\n';
   io::writeTextFile(directory + "/intrinsics.txt", intrinsics.str());
   io::writeTextFile(directory + "/depth.txt", depth_list.str());
 }

@@ -15,8 +15,9 @@ bool fileExists(const std::string& path) {
   return ::stat(path.c_str(), &info) == 0;
 }
 
-/// Reads "fx fy cx cy width height depth_factor" (after '#' comments).
-void readIntrinsicsFile(const std::string& path, PinholeCamera* camera, double* depth_factor) {
+/// Reads "fx fy cx cy width height depth_factor [k1 k2 p1 p2 k3]" (after '#' comments); returns
+/// whether the line gave the distortion.
+bool readIntrinsicsFile(const std::string& path, PinholeCamera* camera, double* depth_factor) {
   std::ifstream in(path);
   std::string line;
   while (std::getline(in, line)) {
@@ -24,9 +25,16 @@ void readIntrinsicsFile(const std::string& path, PinholeCamera* camera, double* 
     std::istringstream words(line);
     if (!(words >> camera->fx >> camera->fy >> camera->cx >> camera->cy >> camera->width >> camera->height >>
           *depth_factor)) {
-      throw std::runtime_error(path + ": expected \"fx fy cx cy width height depth_factor\", got \"" + line + "\"");
+      throw std::runtime_error(path + ": expected \"" + std::string(TumSequence::kIntrinsicsColumns) + "\", got \"" +
+                               line + "\"");
     }
-    return;
+    LensDistortion& d = camera->distortion;
+    if (!(words >> d.k1)) return false;
+    if (!(words >> d.k2 >> d.p1 >> d.p2 >> d.k3) || !(words >> std::ws).eof()) {
+      throw std::runtime_error(path + ": expected \"" + std::string(TumSequence::kIntrinsicsColumns) +
+                               "\" (all five distortion coefficients or none), got \"" + line + "\"");
+    }
+    return true;
   }
   throw std::runtime_error(path + ": no intrinsics line");
 }
@@ -61,14 +69,26 @@ TumSequence TumSequence::open(const std::string& directory, const SequenceOption
 
   sequence.camera_ = PinholeCamera::tumFreiburg1();
   sequence.intrinsics_source_ = "TUM freiburg1 defaults";
+  bool distortion_given = false;
   const std::string intrinsics_path = directory + "/intrinsics.txt";
   if (fileExists(intrinsics_path)) {
-    readIntrinsicsFile(intrinsics_path, &sequence.camera_, &sequence.depth_factor_);
+    distortion_given = readIntrinsicsFile(intrinsics_path, &sequence.camera_, &sequence.depth_factor_);
     sequence.intrinsics_source_ = "intrinsics.txt";
   }
   if (options.camera) {
     sequence.camera_ = *options.camera;
     sequence.intrinsics_source_ = "options";
+    distortion_given = true;
+  }
+  sequence.distortion_source_ = distortion_given ? sequence.intrinsics_source_ : "none";
+  if (options.distortion) {
+    sequence.camera_.distortion = *options.distortion;
+    sequence.distortion_source_ = "options";
+  } else if (!distortion_given) {
+    if (const auto published = PinholeCamera::tumPublishedDistortion(sequence.camera_)) {
+      sequence.camera_.distortion = *published;
+      sequence.distortion_source_ = "TUM's published calibration for these intrinsics";
+    }
   }
   if (options.depth_factor) sequence.depth_factor_ = *options.depth_factor;
   const auto violations = sequence.camera_.validate();

@@ -26,7 +26,9 @@ void writeCalibrationFile(const std::string& path, const PinholeCamera& camera, 
       << "camera_matrix:\n  rows: 3\n  cols: 3\n  data: [" << camera.fx << ", 0, " << camera.cx << ", 0, " << camera.fy
       << ", " << camera.cy << ", 0, 0, 1]\n"
       << "distortion_model: plumb_bob\n"
-      << "distortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [0, 0, 0, 0, 0]\n"
+      << "distortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [" << camera.distortion.k1 << ", "
+      << camera.distortion.k2 << ", " << camera.distortion.p1 << ", " << camera.distortion.p2 << ", "
+      << camera.distortion.k3 << "]\n"
       << "rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n"
       << "projection_matrix:\n  rows: 3\n  cols: 4\n  data: [" << camera.fx << ", 0, " << camera.cx << ", 0, 0, "
       << camera.fy << ", " << camera.cy << ", 0, 0, 0, 1, 0]\n";

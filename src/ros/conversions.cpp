@@ -1,10 +1,12 @@
 #include "sdf_tracker/ros/conversions.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <stdexcept>
 
+#include <sensor_msgs/distortion_models.h>
 #include <sensor_msgs/image_encodings.h>
 
 namespace sdf_tracker_ros {
@@ -69,6 +71,25 @@ sdf_tracker::PinholeCamera toCamera(const sensor_msgs::CameraInfo& info) {
   camera.cy = info.K[5];
   camera.width = static_cast<int>(info.width);
   camera.height = static_cast<int>(info.height);
+  // plumb_bob's five coefficients; rational_polynomial's are the same five, then k4 k5 k6.
+  const bool plumb_bob = info.distortion_model == sensor_msgs::distortion_models::PLUMB_BOB;
+  const bool rational = info.distortion_model == sensor_msgs::distortion_models::RATIONAL_POLYNOMIAL;
+  const bool any_distortion = std::any_of(info.D.begin(), info.D.end(), [](double d) { return d != 0.0; });
+  if (any_distortion) {
+    const size_t expected = plumb_bob ? 5 : 8;
+    if (!plumb_bob && !rational) {
+      throw std::invalid_argument("camera_info: distortion_model \"" + info.distortion_model +
+                                  "\" is not supported (plumb_bob or rational_polynomial)");
+    }
+    if (info.D.size() != expected) {
+      throw std::invalid_argument("camera_info: " + info.distortion_model + " needs " + std::to_string(expected) +
+                                  " coefficients in D, got " + std::to_string(info.D.size()));
+    }
+    if (rational && (info.D[5] != 0.0 || info.D[6] != 0.0 || info.D[7] != 0.0)) {
+      throw std::invalid_argument("camera_info: rational_polynomial with k4..k6 (D[5..7]) not zero is not supported");
+    }
+    camera.distortion = {info.D[0], info.D[1], info.D[2], info.D[3], info.D[4]};
+  }
   const auto violations = camera.validate();
   if (!violations.empty()) throw std::invalid_argument("camera_info: " + violations.front());
   return camera;
@@ -79,8 +100,9 @@ sensor_msgs::CameraInfo toCameraInfo(const sdf_tracker::PinholeCamera& c, const 
   info.header = header;
   info.width = static_cast<uint32_t>(c.width);
   info.height = static_cast<uint32_t>(c.height);
-  info.distortion_model = "plumb_bob";
-  info.D.assign(5, 0.0);
+  info.distortion_model = sensor_msgs::distortion_models::PLUMB_BOB;
+  const sdf_tracker::LensDistortion& d = c.distortion;
+  info.D = {d.k1, d.k2, d.p1, d.p2, d.k3};
   info.K = {c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1};
   info.R = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   info.P = {c.fx, 0, c.cx, 0, 0, c.fy, c.cy, 0, 0, 0, 1, 0};

@@ -151,7 +151,23 @@ void TrackerServer::frameLoop() {
 }
 
 st::PinholeCamera TrackerServer::cameraFor(const Frame& frame) {
-  if (!options_.intrinsics_from_parameters) return toCamera(*frame.info);
+  if (!options_.intrinsics_from_parameters) {
+    st::PinholeCamera camera = toCamera(*frame.info);
+    // Drivers send D all zero when they know no distortion; for TUM's benchmark intrinsics the
+    // distortion is known (TUM publishes it) and the images are not undistorted.
+    if (camera.distortion.isZero()) {
+      if (const auto published = st::PinholeCamera::tumPublishedDistortion(camera)) {
+        camera.distortion = *published;
+        if (!announced_tum_distortion_) {
+          ROS_INFO("sdf_tracker: %s holds TUM benchmark intrinsics without distortion: removing the lens distortion "
+                   "TUM publishes for them (k1 %.4f k2 %.4f p1 %.4f p2 %.4f k3 %.4f)",
+                   info_topic_.c_str(), published->k1, published->k2, published->p1, published->p2, published->k3);
+          announced_tum_distortion_ = true;
+        }
+      }
+    }
+    return camera;
+  }
   const st::PinholeCamera camera = camera_settings_.camera();
   sensor_msgs::CameraInfoConstPtr info;
   {

@@ -44,7 +44,11 @@ Tracks a depth camera through a TUM-layout sequence and reconstructs the scene.
   --frames N            only the first N frames
   --threads N           OpenMP threads (default: all cores)
   --depth-factor F      raw depth units per metre (default: intrinsics.txt, else 5000)
-  --intrinsics FX,FY,CX,CY[,W,H]  override the sequence's intrinsics
+  --intrinsics FX,FY,CX,CY[,W,H]  override the sequence's intrinsics (no lens distortion
+                        unless --distortion)
+  --distortion K1,K2,P1,P2,K3  the lens distortion (plumb bob) to remove from every image;
+                        0,0,0,0,0 for none (default: intrinsics.txt's last five columns,
+                        else TUM's published one when the intrinsics are TUM freiburg1/2's)
   --load-volume FILE    track against a saved .vti map instead of starting empty
   --save-volume         also write the map as sdf_volume.vti (ParaView) and triangles.obj
   --raycast             also ray-cast the virtual depth view every frame (as the node's
@@ -52,6 +56,15 @@ Tracks a depth camera through a TUM-layout sequence and reconstructs the scene.
   --quiet               no progress bar
   --list-params         print every parameter with its value in the chosen preset and exit
 )";
+
+st::LensDistortion parseDistortion(const std::string& text) {
+  std::vector<double> v;
+  std::istringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) v.push_back(st::parseNumber("--distortion", item));
+  if (v.size() != 5) throw std::invalid_argument("--distortion: expected K1,K2,P1,P2,K3, got \"" + text + "\"");
+  return {v[0], v[1], v[2], v[3], v[4]};
+}
 
 st::PinholeCamera parseIntrinsics(const std::string& text, const st::PinholeCamera& base) {
   std::vector<double> v;
@@ -83,7 +96,8 @@ double percentile(std::vector<double> values, double q) {
 int run(int argc, char** argv) {
   const st::tools::CommandLine args(
       argc, argv,
-      {"sequence", "output", "preset", "param", "frames", "threads", "depth-factor", "intrinsics", "load-volume"},
+      {"sequence", "output", "preset", "param", "frames", "threads", "depth-factor", "intrinsics", "distortion",
+       "load-volume"},
       {"save-volume", "raycast", "quiet", "list-params", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -134,6 +148,7 @@ int run(int argc, char** argv) {
   st::SequenceOptions options;
   if (args.has("depth-factor")) options.depth_factor = args.getDouble("depth-factor", 0.0);
   if (args.has("intrinsics")) options.camera = parseIntrinsics(args.get("intrinsics"), st::PinholeCamera::tumFreiburg1());
+  if (args.has("distortion")) options.distortion = parseDistortion(args.get("distortion"));
   st::TumSequence sequence = st::TumSequence::open(sequence_dir, options);
   if (args.has("frames")) {
     const int frames = args.getInt("frames", 0);
@@ -148,6 +163,13 @@ int run(int argc, char** argv) {
             << camera.height << ", fx " << camera.fx << " fy " << camera.fy << " cx " << camera.cx << " cy "
             << camera.cy << " (" << sequence.intrinsicsSource() << "), depth factor " << sequence.depthFactor()
             << "\n";
+  const st::LensDistortion& d = camera.distortion;
+  if (d.isZero()) {
+    std::cout << "lens distortion: none (" << sequence.distortionSource() << ")\n";
+  } else {
+    std::cout << "lens distortion removed from every image: k1 " << d.k1 << " k2 " << d.k2 << " p1 " << d.p1 << " p2 "
+              << d.p2 << " k3 " << d.k3 << " (" << sequence.distortionSource() << ")\n";
+  }
   st::SdfPipeline pipeline(settings.pipeline);
   if (args.has("load-volume")) {
     pipeline.setVolume(st::io::readVti(args.get("load-volume"), settings.pipeline.volume.compact_voxels));

@@ -4,7 +4,9 @@
 #include <utility>
 
 #include "sdf_tracker/core/camera.h"
+#include "sdf_tracker/core/depth_undistortion.h"
 #include "sdf_tracker/core/tsdf_volume.h"
+#include "test_helpers.h"
 
 namespace sdf_tracker {
 namespace {
@@ -42,6 +44,74 @@ TEST(PinholeCamera, ValidateNamesEveryViolation) {
   ASSERT_EQ(violations.size(), 2u);
   EXPECT_NE(violations[0].find("fx must be > 0 (got -1)"), std::string::npos);
   EXPECT_NE(violations[1].find("height"), std::string::npos);
+}
+
+/// TUM freiburg1's published lens (the strongest distortion a supported camera has).
+PinholeCamera distortedCamera() {
+  PinholeCamera camera = PinholeCamera::tumFreiburg1();
+  camera.distortion = *PinholeCamera::tumPublishedDistortion(camera);
+  return camera;
+}
+
+TEST(LensDistortion, UndistortInvertsDistortAcrossTheImage) {
+  const PinholeCamera camera = distortedCamera();
+  for (const Eigen::Vector2d pixel : {Eigen::Vector2d(0, 0), Eigen::Vector2d(639, 479), Eigen::Vector2d(320, 10),
+                                      Eigen::Vector2d(318.6, 255.3), Eigen::Vector2d(5, 400)}) {
+    const Eigen::Vector2d seen((pixel.x() - camera.cx) / camera.fx, (pixel.y() - camera.cy) / camera.fy);
+    const Eigen::Vector2d ideal = camera.distortion.undistort(seen);
+    EXPECT_LT((camera.distortion.distort(ideal) - seen).norm() * camera.fx, 1e-6) << pixel.transpose();
+  }
+  // The corner moves by pixels: the distortion is not negligible.
+  const Eigen::Vector2d corner(-camera.cx / camera.fx, -camera.cy / camera.fy);
+  EXPECT_GT((camera.distortion.undistort(corner) - corner).norm() * camera.fx, 5.0);
+  EXPECT_EQ(LensDistortion().distort(corner), corner);
+}
+
+TEST(LensDistortion, TumsPublishedDistortionBelongsToTumsIntrinsicsOnly) {
+  const auto freiburg1 = PinholeCamera::tumPublishedDistortion(PinholeCamera::tumFreiburg1());
+  ASSERT_TRUE(freiburg1.has_value());
+  EXPECT_DOUBLE_EQ(freiburg1->k1, 0.2624);
+  EXPECT_DOUBLE_EQ(freiburg1->k3, 1.1633);
+  PinholeCamera freiburg2 = PinholeCamera::tumFreiburg1();
+  freiburg2.fx = 520.9, freiburg2.fy = 521.0, freiburg2.cx = 325.1, freiburg2.cy = 249.7;
+  ASSERT_TRUE(PinholeCamera::tumPublishedDistortion(freiburg2).has_value());
+  EXPECT_DOUBLE_EQ(PinholeCamera::tumPublishedDistortion(freiburg2)->k1, 0.2312);
+  EXPECT_FALSE(PinholeCamera::tumPublishedDistortion(PinholeCamera()).has_value()) << "a generic Kinect";
+  EXPECT_FALSE(PinholeCamera::tumPublishedDistortion(test::testCamera()).has_value()) << "another resolution";
+}
+
+TEST(PinholeCamera, ValidateRejectsANonFiniteDistortion) {
+  PinholeCamera camera;
+  camera.distortion.k2 = std::nan("");
+  const auto violations = camera.validate();
+  ASSERT_EQ(violations.size(), 1u);
+  EXPECT_NE(violations[0].find("k2"), std::string::npos);
+}
+
+TEST(DepthUndistortion, GivesTheImageAnIdealLensWouldHaveTaken) {
+  const PinholeCamera lens = distortedCamera();
+  DepthUndistortion undistortion(lens);
+  const PinholeCamera ideal = undistortion.idealCamera();
+  EXPECT_TRUE(ideal.distortion.isZero());
+  const Eigen::Isometry3d T_W_C = synthetic::cameraPose(synthetic::Motion::kDesk, 0.0, 10.0);
+  const DepthImage seen = test::renderRoom(T_W_C, lens);
+  const DepthImage expected = test::renderRoom(T_W_C, ideal);
+  auto agreement = [&](const DepthImage& image) {  // share of pixels within 1 cm of the ideal image
+    int close = 0, both = 0;
+    for (int v = 0; v < ideal.height; ++v) {
+      for (int u = 0; u < ideal.width; ++u) {
+        if (!DepthImage::isMeasurement(image.at(u, v)) || !DepthImage::isMeasurement(expected.at(u, v))) continue;
+        ++both;
+        close += std::abs(image.at(u, v) - expected.at(u, v)) < 0.01f;
+      }
+    }
+    return static_cast<double>(close) / both;
+  };
+  const DepthImage undistorted = undistortion.apply(seen);
+  EXPECT_GT(agreement(undistorted), 0.97);
+  EXPECT_LT(agreement(seen), agreement(undistorted) - 0.05) << "the test scene shows the distortion";
+  EXPECT_GT(undistorted.countMeasurements(), seen.countMeasurements() * 0.9);
+  EXPECT_THROW(undistortion.apply(DepthImage(320, 240)), std::invalid_argument);
 }
 
 TEST(TsdfVolume, IndexingIsXFastestAndPositionsFollowTheOrigin) {

@@ -68,7 +68,8 @@ TEST(Conversions, UnreadableImagesNameTheProblem) {
 }
 
 TEST(Conversions, CameraInfoRoundTripsThroughTheCamera) {
-  const sdf_tracker::PinholeCamera camera = sdf_tracker::PinholeCamera::tumFreiburg1();
+  sdf_tracker::PinholeCamera camera = sdf_tracker::PinholeCamera::tumFreiburg1();
+  camera.distortion = {0.1, -0.2, 0.001, -0.002, 0.3};
   std_msgs::Header header;
   header.frame_id = "camera_depth_optical_frame";
   const sensor_msgs::CameraInfo info = toCameraInfo(camera, header);
@@ -82,6 +83,34 @@ TEST(Conversions, CameraInfoRoundTripsThroughTheCamera) {
   EXPECT_DOUBLE_EQ(back.fy, camera.fy);
   EXPECT_DOUBLE_EQ(back.cx, camera.cx);
   EXPECT_DOUBLE_EQ(back.cy, camera.cy);
+  EXPECT_EQ(back.distortion, camera.distortion);
+}
+
+TEST(Conversions, CameraInfoDistortionThePipelineCannotRemoveIsRefusedByName) {
+  sensor_msgs::CameraInfo info = toCameraInfo(sdf_tracker::PinholeCamera(), std_msgs::Header());
+  info.distortion_model = "rational_polynomial";
+  info.D = {0.1, -0.2, 0.0, 0.0, 0.3, 0.0, 0.0, 0.0};
+  EXPECT_DOUBLE_EQ(toCamera(info).distortion.k3, 0.3) << "rational_polynomial without k4..k6 is plumb bob";
+  info.D[6] = 0.01;
+  auto refusal = [&]() -> std::string {
+    try {
+      toCamera(info);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  EXPECT_NE(refusal().find("k4..k6"), std::string::npos) << refusal();
+  info.distortion_model = "equidistant";
+  info.D = {0.1, 0.0, 0.0, 0.0};
+  EXPECT_NE(refusal().find("\"equidistant\""), std::string::npos) << refusal();
+  info.D = {0.0, 0.0, 0.0, 0.0};
+  EXPECT_TRUE(toCamera(info).distortion.isZero()) << "any model with zero coefficients is no distortion";
+  info.distortion_model = "plumb_bob";
+  info.D = {0.1, 0.2};
+  EXPECT_NE(refusal().find("needs 5"), std::string::npos) << refusal();
+  info.D.clear();
+  EXPECT_TRUE(toCamera(info).distortion.isZero()) << "no D at all";
 }
 
 TEST(Reconfigure, TheCfgListsExactlyTheLiveRowsOfTheTableWithTheirTypesAndDefaultsAndNoClampingRange) {

@@ -61,6 +61,32 @@ INSTANTIATE_TEST_SUITE_P(Motions, SyntheticSequence,
                            return synthetic::toString(motion.param);
                          });
 
+TEST(SyntheticSequence, ALensWithTumsDistortionIsTrackedOnceTheDistortionIsRemoved) {
+  const std::string dir = test::scratchDirectory("e2e_distorted");
+  synthetic::SequenceSpec spec;
+  spec.frames = 150;
+  spec.seed = 11;
+  spec.camera = test::testCamera();
+  spec.camera.distortion = *PinholeCamera::tumPublishedDistortion(PinholeCamera::tumFreiburg1());
+  synthetic::writeSequence(dir, spec);
+  const TumSequence sequence = TumSequence::open(dir);
+  ASSERT_EQ(sequence.camera().distortion, spec.camera.distortion) << "intrinsics.txt carries the distortion";
+  const RunResult run = runPipeline(sequence, preset("default").pipeline);
+  const double ate = evaluation::computeAte(run.trajectory, sequence.groundTruth()).translation_m.rmse;
+
+  SequenceOptions ignore;  // the same images taken for an ideal lens's
+  ignore.distortion = LensDistortion();
+  const TumSequence as_if_ideal = TumSequence::open(dir, ignore);
+  const double ate_ignored =
+      evaluation::computeAte(runPipeline(as_if_ideal, preset("default").pipeline).trajectory, sequence.groundTruth())
+          .translation_m.rmse;
+  std::cout << "[ figures  ] distorted lens: ATE RMSE " << ate * 1000 << " mm undistorted, " << ate_ignored * 1000
+            << " mm with the distortion ignored\n";
+  EXPECT_EQ(run.failed_frames, 0);
+  EXPECT_LE(ate, kSyntheticMaxAte_m);
+  EXPECT_GT(ate_ignored, 2.0 * ate) << "the distortion matters in this scene";
+}
+
 TEST(RealSequence, RedkitchenEveryFrameTrackedWithinThreeCentimetres) {
   const char* env = std::getenv("SDF_TRACKER_DATA");
   const std::string data = env ? env : SDF_TRACKER_SHARED_DATA_DEFAULT;

@@ -193,6 +193,42 @@ TEST(TumSequence, ReadsIntrinsicsFileOrFallsBackToFreiburg1) {
   EXPECT_THROW(TumSequence::open(dir + "/missing"), std::runtime_error);
 }
 
+TEST(TumSequence, LensDistortionComesFromTheFileOrTumsPublishedCalibration) {
+  const std::string dir = test::scratchDirectory("seq_distortion");
+  synthetic::SequenceSpec spec;
+  spec.frames = 1;
+  synthetic::writeSequence(dir, spec);  // 640x480 with TUM freiburg1's intrinsics, written with 0 distortion
+  EXPECT_TRUE(TumSequence::open(dir).camera().distortion.isZero()) << "the file's explicit zeros hold";
+  EXPECT_EQ(TumSequence::open(dir).distortionSource(), "intrinsics.txt");
+
+  writeFile(dir + "/intrinsics.txt", "# fx fy cx cy width height depth_factor\n517.3 516.5 318.6 255.3 640 480 5000\n");
+  const TumSequence tum = TumSequence::open(dir);
+  EXPECT_DOUBLE_EQ(tum.camera().distortion.k1, 0.2624) << "TUM's intrinsics without distortion: TUM's distortion";
+  EXPECT_NE(tum.distortionSource().find("TUM"), std::string::npos);
+  std::remove((dir + "/intrinsics.txt").c_str());
+  EXPECT_DOUBLE_EQ(TumSequence::open(dir).camera().distortion.k1, 0.2624) << "the freiburg1 defaults";
+
+  writeFile(dir + "/intrinsics.txt", "585 585 320 240 640 480 1000\n");
+  EXPECT_TRUE(TumSequence::open(dir).camera().distortion.isZero()) << "another camera: none";
+  EXPECT_EQ(TumSequence::open(dir).distortionSource(), "none");
+  writeFile(dir + "/intrinsics.txt", "585 585 320 240 640 480 1000 0.1 -0.2 0.001 0.002 0.3\n");
+  EXPECT_DOUBLE_EQ(TumSequence::open(dir).camera().distortion.p2, 0.002);
+  SequenceOptions options;
+  options.distortion = LensDistortion();
+  EXPECT_TRUE(TumSequence::open(dir, options).camera().distortion.isZero()) << "the options win";
+
+  for (const char* bad : {"585 585 320 240 640 480 1000 0.1\n", "585 585 320 240 640 480 1000 0.1 0 0 0 0 7\n",
+                          "585 585 320 240 640 480 1000 0.1 0 0 0 nan\n"}) {
+    writeFile(dir + "/intrinsics.txt", bad);
+    try {
+      TumSequence::open(dir);
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("intrinsics"), std::string::npos) << e.what();
+    }
+  }
+}
+
 /// Runs `fn` in a child process whose address space is capped at `megabytes` more than now:
 /// an allocation the size of a header's claim fails there. True when fn returned true.
 template <typename Fn>

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -7,8 +8,31 @@
 
 namespace sdf_tracker {
 
-/// Pinhole intrinsics of a depth camera (no distortion), in pixels.
-/// The optical frame is x right, y down, z forward (REP 103 optical convention).
+/// Lens distortion in the plumb-bob model (OpenCV's and sensor_msgs/CameraInfo's k1 k2 p1 p2 k3),
+/// acting on normalised image coordinates, so the same coefficients hold at every resolution.
+struct LensDistortion {
+  double k1 = 0.0, k2 = 0.0, p1 = 0.0, p2 = 0.0, k3 = 0.0;
+
+  bool isZero() const { return k1 == 0.0 && k2 == 0.0 && p1 == 0.0 && p2 == 0.0 && k3 == 0.0; }
+  /// Where the lens images the ideal normalised point (x, y) = (X/Z, Y/Z).
+  Eigen::Vector2d distort(const Eigen::Vector2d& ideal) const {
+    const double x = ideal.x(), y = ideal.y(), r2 = x * x + y * y;
+    const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+    return {x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
+            y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y};
+  }
+  /// The inverse of distort: the ideal normalised point the lens imaged at `distorted` (fixed-point
+  /// iteration, exact to ~1e-9 for the moderate distortion of depth cameras).
+  Eigen::Vector2d undistort(const Eigen::Vector2d& distorted) const;
+  bool operator==(const LensDistortion& o) const {
+    return k1 == o.k1 && k2 == o.k2 && p1 == o.p1 && p2 == o.p2 && k3 == o.k3;
+  }
+};
+
+/// Intrinsics of a depth camera, in pixels. The optical frame is x right, y down, z forward
+/// (REP 103 optical convention). backProject and project are the ideal pinhole; a camera with
+/// lens distortion has its depth images undistorted first (DepthUndistortion), as the pipeline
+/// does with every frame.
 struct PinholeCamera {
   double fx = 520.0;
   double fy = 520.0;
@@ -16,6 +40,7 @@ struct PinholeCamera {
   double cy = 239.5;
   int width = 640;
   int height = 480;
+  LensDistortion distortion;
 
   /// Every violated constraint, in words; empty when the camera is usable.
   std::vector<std::string> validate() const;
@@ -37,9 +62,21 @@ struct PinholeCamera {
             static_cast<float>(fy * p_C.y() / p_C.z() + cy)};
   }
 
-  /// The TUM RGB-D benchmark's freiburg1 depth camera, the documented default for sequences
-  /// that carry no intrinsics.txt.
+  bool operator==(const PinholeCamera& o) const {
+    return fx == o.fx && fy == o.fy && cx == o.cx && cy == o.cy && width == o.width && height == o.height &&
+           distortion == o.distortion;
+  }
+  bool operator!=(const PinholeCamera& o) const { return !(*this == o); }
+
+  /// The TUM RGB-D benchmark's freiburg1 intrinsics (of the colour camera, to which the depth images
+  /// are registered), without lens distortion: see tumPublishedDistortion.
   static PinholeCamera tumFreiburg1();
+
+  /// The lens distortion TUM publishes beside these intrinsics when they are a benchmark camera's
+  /// (freiburg1 or freiburg2 at 640x480, matched to 0.05 px); nothing for any other camera. The
+  /// benchmark's depth images are registered to that colour camera but not undistorted, and files
+  /// that copy TUM's intrinsics usually leave the distortion out.
+  static std::optional<LensDistortion> tumPublishedDistortion(const PinholeCamera& camera);
 };
 
 }  // namespace sdf_tracker

@@ -2,6 +2,7 @@
 
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -9,6 +10,7 @@
 
 #include "sdf_tracker/core/camera.h"
 #include "sdf_tracker/core/depth_image.h"
+#include "sdf_tracker/core/depth_undistortion.h"
 #include "sdf_tracker/core/integrator.h"
 #include "sdf_tracker/core/raycaster.h"
 #include "sdf_tracker/core/tracker.h"
@@ -68,7 +70,8 @@ class SdfPipeline {
 
   /// Tracks and fuses one depth image (metres) taken at `timestamp_s` (any clock; frames must come
   /// in time order; NaN: evenly spaced frames). Bad input yields a report with kBadInput; the map
-  /// and pose are then untouched. The camera must match the image size.
+  /// and pose are then untouched. The camera must match the image size; its lens distortion, if
+  /// any, is removed from the image first.
   FrameReport processFrame(const DepthImage& depth, const PinholeCamera& camera,
                            double timestamp_s = std::numeric_limits<double>::quiet_NaN());
 
@@ -92,7 +95,8 @@ class SdfPipeline {
   static Eigen::Vector3d volumeOriginFor(const PipelineConfig& config);
 
  private:
-  DepthImage filterDepth(const DepthImage& depth) const;
+  /// The image as the tracker and integrator take it: undistorted, depths out of range removed.
+  DepthImage prepareDepth(const DepthImage& depth, const PinholeCamera& camera);
   /// Where the camera should be at `timestamp_s` if it kept its last motion; the last pose when
   /// prediction is off or there is no motion to go by.
   Eigen::Isometry3d predictPose(double timestamp_s) const;
@@ -101,6 +105,8 @@ class SdfPipeline {
   std::unique_ptr<TsdfVolume> volume_;
   std::unique_ptr<Integrator> integrator_;
   std::unique_ptr<Tracker> tracker_;
+  /// The pixel map of the last distorted camera seen (made again when the camera changes).
+  std::optional<DepthUndistortion> undistortion_;
   Eigen::Isometry3d T_W_C_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   bool map_initialised_ = false;

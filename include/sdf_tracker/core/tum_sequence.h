@@ -12,14 +12,20 @@ namespace sdf_tracker {
 
 /// Overrides for what a sequence folder says about itself.
 struct SequenceOptions {
+  /// Intrinsics and lens distortion.
   std::optional<PinholeCamera> camera;
+  /// Replaces the lens distortion only (of the options' camera, intrinsics.txt or the defaults).
+  std::optional<LensDistortion> distortion;
   std::optional<double> depth_factor;
 };
 
 /// A depth sequence in the TUM RGB-D layout: depth.txt ("timestamp depth/<file>.png"), 16-bit
-/// PNGs, optional groundtruth.txt and intrinsics.txt ("fx fy cx cy width height depth_factor").
+/// PNGs, optional groundtruth.txt and intrinsics.txt (kIntrinsicsColumns).
 /// Intrinsics and depth factor come from the options, else intrinsics.txt, else the TUM
-/// freiburg1 defaults (517.3, 516.5, 318.6, 255.3; factor 5000).
+/// freiburg1 defaults (517.3, 516.5, 318.6, 255.3; factor 5000). The lens distortion comes from
+/// the options, else intrinsics.txt's last five columns; when neither gives it and the intrinsics
+/// are a TUM benchmark camera's, it is the distortion TUM publishes with them (the benchmark's
+/// depth is not undistorted); else none.
 class TumSequence {
  public:
   /// Throws std::runtime_error naming the file and the problem.
@@ -35,6 +41,9 @@ class TumSequence {
   double depthFactor() const { return depth_factor_; }
   /// Where the intrinsics came from, for the user: "options", "intrinsics.txt" or "TUM freiburg1 defaults".
   const std::string& intrinsicsSource() const { return intrinsics_source_; }
+  /// Where the lens distortion came from, for the user: "none", "options", "intrinsics.txt" or
+  /// TUM's published calibration.
+  const std::string& distortionSource() const { return distortion_source_; }
   const std::vector<io::StampedPose>& groundTruth() const { return ground_truth_; }
 
   /// Drops every frame after the first n.
@@ -43,6 +52,7 @@ class TumSequence {
   }
 
   static constexpr double kTumDepthFactor = 5000.0;
+  static constexpr const char* kIntrinsicsColumns = "fx fy cx cy width height depth_factor [k1 k2 p1 p2 k3]";
 
  private:
   struct Frame {
@@ -53,6 +63,7 @@ class TumSequence {
   PinholeCamera camera_;
   double depth_factor_ = kTumDepthFactor;
   std::string intrinsics_source_;
+  std::string distortion_source_;
   std::vector<io::StampedPose> ground_truth_;
 };
 

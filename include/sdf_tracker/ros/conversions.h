@@ -22,9 +22,11 @@ sdf_tracker::DepthImage toDepthImage(const sensor_msgs::Image& msg);
 /// A 32FC1 image in metres (NaN where there is no measurement).
 sensor_msgs::Image toImageMsg(const sdf_tracker::DepthImage& depth, const std_msgs::Header& header);
 
-/// Intrinsics from camera_info (K); throws std::invalid_argument for a zero or non-finite K or size.
+/// Intrinsics (K) and lens distortion (D, plumb_bob or rational_polynomial without k4..k6) from
+/// camera_info; throws std::invalid_argument for a zero or non-finite K or size, or a distortion
+/// the pipeline cannot remove.
 sdf_tracker::PinholeCamera toCamera(const sensor_msgs::CameraInfo& info);
-/// The inverse: camera_info of a pinhole camera without distortion (plumb_bob, D all zero).
+/// The inverse: camera_info (plumb_bob) of the camera.
 sensor_msgs::CameraInfo toCameraInfo(const sdf_tracker::PinholeCamera& camera, const std_msgs::Header& header);
 
 geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T);

@@ -80,6 +80,7 @@ class TrackerServer {
   ros::Time last_stamp_;
   std::vector<double> frame_ms_;  ///< the node's whole cost of each processed frame
   bool warned_intrinsics_ = false;
+  bool announced_tum_distortion_ = false;
   bool lost_ = false;
 
   std::unique_ptr<MapServices> services_;
