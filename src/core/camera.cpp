@@ -90,4 +90,10 @@ std::optional<LensDistortion> PinholeCamera::tumPublishedDistortion(const Pinhol
   return std::nullopt;
 }
 
+std::optional<LensDistortion> PinholeCamera::tumRecordingDistortion(const PinholeCamera& camera,
+                                                                    double first_stamp_s) {
+  if (!(first_stamp_s >= kUnixTimeFrom_s)) return std::nullopt;
+  return tumPublishedDistortion(camera);
+}
+
 }  // namespace sdf_tracker

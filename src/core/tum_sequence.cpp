@@ -80,23 +80,27 @@ TumSequence TumSequence::open(const std::string& directory, const SequenceOption
     sequence.intrinsics_source_ = "options";
     distortion_given = true;
   }
-  sequence.distortion_source_ = distortion_given ? sequence.intrinsics_source_ : "none";
-  if (options.distortion) {
-    sequence.camera_.distortion = *options.distortion;
-    sequence.distortion_source_ = "options";
-  } else if (!distortion_given) {
-    if (const auto published = PinholeCamera::tumPublishedDistortion(sequence.camera_)) {
-      sequence.camera_.distortion = *published;
-      sequence.distortion_source_ = "TUM's published calibration for these intrinsics";
-    }
-  }
   if (options.depth_factor) sequence.depth_factor_ = *options.depth_factor;
-  const auto violations = sequence.camera_.validate();
-  if (!violations.empty()) throw std::runtime_error(directory + ": invalid intrinsics: " + violations.front());
   if (!(sequence.depth_factor_ > 0.0)) {
     throw std::runtime_error(directory + ": depth factor must be > 0 (got " + std::to_string(sequence.depth_factor_) +
                              ")");
   }
+  sequence.distortion_source_ = distortion_given ? sequence.intrinsics_source_ : "none stated";
+  if (options.distortion) {
+    sequence.camera_.distortion = *options.distortion;
+    sequence.distortion_source_ = "options";
+  } else if (!distortion_given && PinholeCamera::tumPublishedDistortion(sequence.camera_)) {
+    // TUM's intrinsics without a word on distortion: TUM's own recording, or data made for them?
+    if (const auto published =
+            PinholeCamera::tumRecordingDistortion(sequence.camera_, sequence.frames_.front().timestamp_s)) {
+      sequence.camera_.distortion = *published;
+      sequence.distortion_source_ = "TUM's published calibration for these intrinsics";
+    } else {
+      sequence.distortion_source_ = "TUM's intrinsics, but not stamped in Unix time as TUM's recordings are";
+    }
+  }
+  const auto violations = sequence.camera_.validate();
+  if (!violations.empty()) throw std::runtime_error(directory + ": invalid intrinsics: " + violations.front());
   const std::string gt_path = directory + "/groundtruth.txt";
   if (fileExists(gt_path)) sequence.ground_truth_ = io::readTrajectory(gt_path);
   return sequence;

@@ -153,18 +153,24 @@ void TrackerServer::frameLoop() {
 st::PinholeCamera TrackerServer::cameraFor(const Frame& frame) {
   if (!options_.intrinsics_from_parameters) {
     st::PinholeCamera camera = toCamera(*frame.info);
-    // Drivers send D all zero when they know no distortion; for TUM's benchmark intrinsics the
+    // Drivers send D all zero when they know no distortion; for TUM's benchmark recordings the
     // distortion is known (TUM publishes it) and the images are not undistorted.
-    if (camera.distortion.isZero()) {
-      if (const auto published = st::PinholeCamera::tumPublishedDistortion(camera)) {
-        camera.distortion = *published;
-        if (!announced_tum_distortion_) {
+    if (camera.distortion.isZero() && st::PinholeCamera::tumPublishedDistortion(camera)) {
+      if (!tum_recording_distortion_) {  // decided once, on the first frame
+        const double stamp_s = frame.image->header.stamp.toSec();
+        tum_recording_distortion_ =
+            st::PinholeCamera::tumRecordingDistortion(camera, stamp_s).value_or(st::LensDistortion());
+        const st::LensDistortion& d = *tum_recording_distortion_;
+        if (d.isZero()) {
+          ROS_INFO("sdf_tracker: %s holds TUM benchmark intrinsics, but the stamps are not Unix time as in "
+                   "TUM's recordings: no lens distortion removed", info_topic_.c_str());
+        } else {
           ROS_INFO("sdf_tracker: %s holds TUM benchmark intrinsics without distortion: removing the lens distortion "
                    "TUM publishes for them (k1 %.4f k2 %.4f p1 %.4f p2 %.4f k3 %.4f)",
-                   info_topic_.c_str(), published->k1, published->k2, published->p1, published->p2, published->k3);
-          announced_tum_distortion_ = true;
+                   info_topic_.c_str(), d.k1, d.k2, d.p1, d.p2, d.k3);
         }
       }
+      camera.distortion = *tum_recording_distortion_;
     }
     return camera;
   }

@@ -67,7 +67,7 @@ TEST(LensDistortion, UndistortInvertsDistortAcrossTheImage) {
   EXPECT_EQ(LensDistortion().distort(corner), corner);
 }
 
-TEST(LensDistortion, TumsPublishedDistortionBelongsToTumsIntrinsicsOnly) {
+TEST(LensDistortion, TumsPublishedDistortionBelongsToTumsIntrinsicsAndRecordingsOnly) {
   const auto freiburg1 = PinholeCamera::tumPublishedDistortion(PinholeCamera::tumFreiburg1());
   ASSERT_TRUE(freiburg1.has_value());
   EXPECT_DOUBLE_EQ(freiburg1->k1, 0.2624);
@@ -78,6 +78,11 @@ TEST(LensDistortion, TumsPublishedDistortionBelongsToTumsIntrinsicsOnly) {
   EXPECT_DOUBLE_EQ(PinholeCamera::tumPublishedDistortion(freiburg2)->k1, 0.2312);
   EXPECT_FALSE(PinholeCamera::tumPublishedDistortion(PinholeCamera()).has_value()) << "a generic Kinect";
   EXPECT_FALSE(PinholeCamera::tumPublishedDistortion(test::testCamera()).has_value()) << "another resolution";
+  // Assumed for a recording only when it is stamped like TUM's (Unix time), not for generated data.
+  EXPECT_TRUE(PinholeCamera::tumRecordingDistortion(PinholeCamera::tumFreiburg1(), 1305031102.16).has_value());
+  EXPECT_FALSE(PinholeCamera::tumRecordingDistortion(PinholeCamera::tumFreiburg1(), 0.0).has_value());
+  EXPECT_FALSE(PinholeCamera::tumRecordingDistortion(PinholeCamera::tumFreiburg1(), std::nan("")).has_value());
+  EXPECT_FALSE(PinholeCamera::tumRecordingDistortion(PinholeCamera(), 1305031102.16).has_value());
 }
 
 TEST(PinholeCamera, ValidateRejectsANonFiniteDistortion) {

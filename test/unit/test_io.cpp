@@ -202,6 +202,12 @@ TEST(TumSequence, LensDistortionComesFromTheFileOrTumsPublishedCalibration) {
   EXPECT_EQ(TumSequence::open(dir).distortionSource(), "intrinsics.txt");
 
   writeFile(dir + "/intrinsics.txt", "# fx fy cx cy width height depth_factor\n517.3 516.5 318.6 255.3 640 480 5000\n");
+  const TumSequence generated = TumSequence::open(dir);
+  EXPECT_TRUE(generated.camera().distortion.isZero()) << "TUM's intrinsics, but a generated sequence's clock";
+  EXPECT_NE(generated.distortionSource().find("Unix time"), std::string::npos) << generated.distortionSource();
+
+  // The same frame stamped as TUM stamped its recordings.
+  writeFile(dir + "/depth.txt", "1305031102.160407 depth/" + generated.depthPath(0).substr(dir.size() + 7) + "\n");
   const TumSequence tum = TumSequence::open(dir);
   EXPECT_DOUBLE_EQ(tum.camera().distortion.k1, 0.2624) << "TUM's intrinsics without distortion: TUM's distortion";
   EXPECT_NE(tum.distortionSource().find("TUM"), std::string::npos);
@@ -210,7 +216,7 @@ TEST(TumSequence, LensDistortionComesFromTheFileOrTumsPublishedCalibration) {
 
   writeFile(dir + "/intrinsics.txt", "585 585 320 240 640 480 1000\n");
   EXPECT_TRUE(TumSequence::open(dir).camera().distortion.isZero()) << "another camera: none";
-  EXPECT_EQ(TumSequence::open(dir).distortionSource(), "none");
+  EXPECT_EQ(TumSequence::open(dir).distortionSource(), "none stated");
   writeFile(dir + "/intrinsics.txt", "585 585 320 240 640 480 1000 0.1 -0.2 0.001 0.002 0.3\n");
   EXPECT_DOUBLE_EQ(TumSequence::open(dir).camera().distortion.p2, 0.002);
   SequenceOptions options;

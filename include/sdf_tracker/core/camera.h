@@ -77,6 +77,14 @@ struct PinholeCamera {
   /// benchmark's depth images are registered to that colour camera but not undistorted, and files
   /// that copy TUM's intrinsics usually leave the distortion out.
   static std::optional<LensDistortion> tumPublishedDistortion(const PinholeCamera& camera);
+
+  /// The lens distortion to assume for a recording that states none: TUM's published one when the
+  /// intrinsics are a TUM camera's and the recording is stamped in Unix time, as TUM's recordings
+  /// are; nothing otherwise. Sequences generated for TUM's intrinsics (a simulator's) count time
+  /// from about 0 and were not taken through TUM's lens.
+  static std::optional<LensDistortion> tumRecordingDistortion(const PinholeCamera& camera, double first_stamp_s);
+  /// Stamps from here on are Unix time (2001-09-09); a sequence's own clock starts near 0.
+  static constexpr double kUnixTimeFrom_s = 1e9;
 };
 
 }  // namespace sdf_tracker

@@ -23,9 +23,9 @@ struct SequenceOptions {
 /// PNGs, optional groundtruth.txt and intrinsics.txt (kIntrinsicsColumns).
 /// Intrinsics and depth factor come from the options, else intrinsics.txt, else the TUM
 /// freiburg1 defaults (517.3, 516.5, 318.6, 255.3; factor 5000). The lens distortion comes from
-/// the options, else intrinsics.txt's last five columns; when neither gives it and the intrinsics
-/// are a TUM benchmark camera's, it is the distortion TUM publishes with them (the benchmark's
-/// depth is not undistorted); else none.
+/// the options, else intrinsics.txt's last five columns; when neither gives it, the intrinsics
+/// are a TUM benchmark camera's and the frames are stamped in Unix time as TUM's recordings are,
+/// it is the distortion TUM publishes with them (the benchmark's depth is not undistorted); else none.
 class TumSequence {
  public:
   /// Throws std::runtime_error naming the file and the problem.
@@ -41,8 +41,8 @@ class TumSequence {
   double depthFactor() const { return depth_factor_; }
   /// Where the intrinsics came from, for the user: "options", "intrinsics.txt" or "TUM freiburg1 defaults".
   const std::string& intrinsicsSource() const { return intrinsics_source_; }
-  /// Where the lens distortion came from, for the user: "none", "options", "intrinsics.txt" or
-  /// TUM's published calibration.
+  /// Where the lens distortion came from, or why there is none, for the user: "none stated",
+  /// "options", "intrinsics.txt", TUM's published calibration, or why that was not assumed.
   const std::string& distortionSource() const { return distortion_source_; }
   const std::vector<io::StampedPose>& groundTruth() const { return ground_truth_; }
 

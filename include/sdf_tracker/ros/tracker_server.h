@@ -43,7 +43,8 @@ class TrackerServer {
   void onFrame(const sensor_msgs::ImageConstPtr& image, const sensor_msgs::CameraInfoConstPtr& info);
   void frameLoop();
   void process(const Frame& frame);
-  /// The camera for a frame, or a reason why it cannot be used.
+  /// The camera of `frame` (camera_info or the parameters); throws std::invalid_argument with the
+  /// reason it cannot be used.
   sdf_tracker::PinholeCamera cameraFor(const Frame& frame);
   void checkInputs(const ros::TimerEvent&);
   void reconfigure(sdf_tracker::SdfTrackerConfig& config, uint32_t level);
@@ -80,7 +81,8 @@ class TrackerServer {
   ros::Time last_stamp_;
   std::vector<double> frame_ms_;  ///< the node's whole cost of each processed frame
   bool warned_intrinsics_ = false;
-  bool announced_tum_distortion_ = false;
+  /// For camera_info with TUM's intrinsics and no distortion: what to remove, decided on the first frame.
+  std::optional<sdf_tracker::LensDistortion> tum_recording_distortion_;
   bool lost_ = false;
 
   std::unique_ptr<MapServices> services_;
