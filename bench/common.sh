@@ -1,7 +1,9 @@
-# Sourced by the bench scripts that run the shared real sequences.
+# Sourced by the bench scripts.
 # Sets `repo` and `data` (SDF_TRACKER_DATA, default ../shared/data beside the repository) and
 # defines real_sequences: `real_sequences "$@"` fills the array `sequences` with the arguments, or
-# with TUM fr1_xyz and 7-Scenes redkitchen from $data, saying SKIPPED for each one missing.
+# with TUM fr1_xyz and 7-Scenes redkitchen from $data, saying SKIPPED for each one missing; and
+# synthetic_sequence: `synthetic_sequence BIN WORK MOTION` prints the folder of the bench's synthetic
+# sequence with that motion (300 frames, seed 21), generating it under WORK the first time.
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 data="${SDF_TRACKER_DATA:-$repo/../shared/data}"
 
@@ -11,4 +13,11 @@ real_sequences() {
   for s in tum_fr1_xyz 7scenes/redkitchen; do
     if [ -f "$data/$s/depth.txt" ]; then sequences+=("$data/$s"); else echo "SKIPPED: $data/$s not found"; fi
   done
+}
+
+synthetic_sequence() {
+  local bin="$1" work="$2" motion="$3"
+  local dir="$work/synthetic_$motion"
+  [ -f "$dir/depth.txt" ] || "$bin/sdf_tracker_synth" --output "$dir" --motion "$motion" --frames 300 --seed 21 >/dev/null
+  echo "$dir"
 }

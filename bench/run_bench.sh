@@ -7,8 +7,7 @@
 # Speed figures are medians of per-frame times measured inside the runner (tracking + fusion, and
 # ray casting where listed); no test asserts any of them.
 set -euo pipefail
-repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-data="${SDF_TRACKER_DATA:-$repo/../shared/data}"
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 work="$repo/build/bench"
 results="$repo/bench/results"
 mkdir -p "$work/runs" "$results"
@@ -21,9 +20,7 @@ bin="$repo/build/ws/devel/lib/sdf_tracker"
 
 sequences=()
 for motion in desk slow fast planar loop; do
-  dir="$work/synthetic_$motion"
-  [ -f "$dir/depth.txt" ] || "$bin/sdf_tracker_synth" --output "$dir" --motion "$motion" --frames 300 --seed 21 >/dev/null
-  sequences+=("$dir")
+  sequences+=("$(synthetic_sequence "$bin" "$work" "$motion")")
 done
 redkitchen="$data/7scenes/redkitchen"
 ablation_sequences=("$work/synthetic_desk")

@@ -4,6 +4,7 @@
 
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -25,9 +26,9 @@ struct ToolRun {
   std::string output;  ///< stdout and stderr
 };
 
-/// Runs the offline runner with `arguments` (already quoted for the shell).
-ToolRun offline(const std::string& arguments) {
-  const std::string command = std::string(SDF_TRACKER_OFFLINE) + " --quiet " + arguments + " 2>&1";
+/// Runs `command` (already quoted for the shell), capturing stdout and stderr.
+ToolRun runCommand(const std::string& arguments) {
+  const std::string command = arguments + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   ToolRun run{-1, ""};
   char buffer[4096];
@@ -35,6 +36,11 @@ ToolRun offline(const std::string& arguments) {
   const int status = pipe ? pclose(pipe) : -1;
   run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return run;
+}
+
+/// Runs the offline runner with `arguments` (already quoted for the shell).
+ToolRun offline(const std::string& arguments) {
+  return runCommand(std::string(SDF_TRACKER_OFFLINE) + " --quiet " + arguments);
 }
 
 /// A short synthetic QVGA sequence with ground truth.
@@ -152,6 +158,46 @@ TEST(Offline, TheJsonSummaryIsValidJsonEvenForAPathWithATab) {
   const ToolRun run = offline("--sequence '" + tabbed + "' --output " + out);
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_EQ(std::system(("/usr/bin/python3 -m json.tool " + out + "/summary.json > /dev/null").c_str()), 0);
+}
+
+TEST(Offline, TheLensDistortionIsTakenFromTheOptionAndSaid) {
+  const std::string sequence = shortSequence(3);
+  const ToolRun none = offline("--sequence " + sequence + " --output " + test::scratchDirectory("lens0"));
+  ASSERT_EQ(none.exit_code, 0) << none.output;
+  EXPECT_NE(none.output.find("lens distortion: none (intrinsics.txt)"), std::string::npos) << none.output;
+  const ToolRun given = offline("--sequence " + sequence + " --output " + test::scratchDirectory("lens1") +
+                                " --distortion 0.1,-0.2,0,0,0.05");
+  ASSERT_EQ(given.exit_code, 0) << given.output;
+  EXPECT_NE(given.output.find("lens distortion removed from every image: k1 0.1 k2 -0.2"), std::string::npos)
+      << given.output;
+  const ToolRun short_list = offline("--sequence " + sequence + " --output " + test::scratchDirectory("lens2") +
+                                     " --distortion 0.1,0.2");
+  EXPECT_EQ(short_list.exit_code, 1);
+  EXPECT_NE(short_list.output.find("--distortion: expected K1,K2,P1,P2,K3, got \"0.1,0.2\""), std::string::npos)
+      << short_list.output;
+}
+
+TEST(Evaluate, ThePerPoseErrorsAreTheOnesTheRmseSummarises) {
+  const std::string sequence = shortSequence(12);
+  const std::string out = test::scratchDirectory("errors");
+  ASSERT_EQ(offline("--sequence " + sequence + " --output " + out).exit_code, 0);
+  const ToolRun run = runCommand(std::string(SDF_TRACKER_EVALUATE) + " --groundtruth " + sequence +
+                                 "/groundtruth.txt --estimate " + out + "/trajectory.txt --errors " + out + "/e.csv");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  std::ifstream csv(out + "/e.csv");
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "timestamp,error_m");
+  double sum = 0.0;
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    sum += std::pow(std::stod(line.substr(line.find(',') + 1)), 2);
+    ++rows;
+  }
+  EXPECT_EQ(rows, 12);
+  const auto ate = evaluation::computeAte(io::readTrajectory(out + "/trajectory.txt"),
+                                          io::readTrajectory(sequence + "/groundtruth.txt"));
+  EXPECT_NEAR(std::sqrt(sum / rows), ate.translation_m.rmse, 1e-5);
 }
 
 }  // namespace
