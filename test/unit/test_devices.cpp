@@ -111,12 +111,15 @@ TEST(CalibrationFile, HoldsTheIntrinsicsInCameraInfoManagersLayout) {
   const std::string root = test::scratchDirectory("calibration");
   EXPECT_EQ(calibrationFileFor(root), root + "/depth_camera_info.yaml");
   EXPECT_EQ(calibrationFileFor(root + "/x.oni"), root + "/x.oni.yaml");
-  writeCalibrationFile(root + "/c.yaml", PinholeCamera::tumFreiburg1(), "depth");
+  PinholeCamera camera = PinholeCamera::tumFreiburg1();
+  camera.distortion = *PinholeCamera::tumPublishedDistortion(camera);
+  writeCalibrationFile(root + "/c.yaml", camera, "depth");
   std::ifstream in(root + "/c.yaml");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("image_width: 640"), std::string::npos);
   EXPECT_NE(text.find("data: [517.3, 0, 318.6, 0, 516.5, 255.3, 0, 0, 1]"), std::string::npos) << text;
   EXPECT_NE(text.find("distortion_model: plumb_bob"), std::string::npos);
+  EXPECT_NE(text.find("data: [0.2624, -0.9531, -0.0054, 0.0026, 1.1633]"), std::string::npos) << text;
   fs::remove_all(root);
 }
 
