@@ -34,6 +34,13 @@ std::vector<std::string> PinholeCamera::validate() const {
   return v.list();
 }
 
+std::string PinholeCamera::sizeMismatch(int image_width, int image_height) const {
+  if (image_width == width && image_height == height) return "";
+  std::ostringstream msg;
+  msg << "depth image is " << image_width << "x" << image_height << " but the camera is " << width << "x" << height;
+  return msg.str();
+}
+
 PinholeCamera PinholeCamera::scaledTo(int new_width, int new_height) const {
   if (new_width <= 0 || new_height <= 0 || width % new_width != 0 || height % new_height != 0 ||
       width / new_width != height / new_height) {

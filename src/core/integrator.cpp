@@ -38,11 +38,8 @@ Integrator::Integrator(const IntegratorConfig& config) : config_(config) {
 
 size_t Integrator::integrate(const DepthImage& depth, const PinholeCamera& camera,
                              const Eigen::Isometry3d& T_W_C, TsdfVolume* volume) const {
-  if (depth.width() != camera.width || depth.height() != camera.height) {
-    std::ostringstream msg;
-    msg << "depth image is " << depth.width() << "x" << depth.height() << " but the camera is "
-        << camera.width << "x" << camera.height;
-    throw std::invalid_argument(msg.str());
+  if (const std::string mismatch = camera.sizeMismatch(depth.width(), depth.height()); !mismatch.empty()) {
+    throw std::invalid_argument(mismatch);
   }
   const Eigen::Isometry3f T_C_W = T_W_C.inverse().cast<float>();
   const Eigen::Vector3i dims = volume->dims();

@@ -134,17 +134,14 @@ Eigen::Isometry3d SdfPipeline::predictPose(double timestamp_s) const {
 FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s) {
   FrameReport report;
   report.track.T_W_C = T_W_C_;
-  if (depth.width() != camera.width || depth.height() != camera.height || depth.empty()) {
-    std::ostringstream msg;
-    msg << "depth image is " << depth.width() << "x" << depth.height() << " but the camera is " << camera.width
-        << "x" << camera.height;
+  const std::string mismatch = camera.sizeMismatch(depth.width(), depth.height());
+  if (!mismatch.empty() || depth.empty()) {
     report.track.status = TrackStatus::kBadInput;
-    report.track.message = msg.str();
+    report.track.message = mismatch.empty() ? "the depth image is empty" : mismatch;
     return report;
   }
   const DepthImage filtered = prepareDepth(depth, camera);
-  PinholeCamera ideal_camera = camera;  // the camera of the prepared image
-  ideal_camera.distortion = LensDistortion();
+  const PinholeCamera ideal_camera = camera.withoutDistortion();  // the camera of the prepared image
   if (filtered.countMeasurements() == 0) {
     report.track.status = TrackStatus::kBadInput;
     report.track.message = "no pixel holds a depth within [" + std::to_string(config_.min_depth_m) + ", " +

@@ -200,11 +200,8 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
     result.T_W_C = T_W_C_guess;
     return result;
   };
-  if (depth.width() != camera.width || depth.height() != camera.height) {
-    std::ostringstream msg;
-    msg << "depth image is " << depth.width() << "x" << depth.height() << " but the camera is "
-        << camera.width << "x" << camera.height;
-    return fail(TrackStatus::kBadInput, msg.str());
+  if (const std::string mismatch = camera.sizeMismatch(depth.width(), depth.height()); !mismatch.empty()) {
+    return fail(TrackStatus::kBadInput, mismatch);
   }
   if (depth.countMeasurements() == 0) return fail(TrackStatus::kBadInput, "depth image holds no valid measurement");
   if (!T_W_C_guess.matrix().allFinite()) return fail(TrackStatus::kBadInput, "pose guess is not finite");

@@ -215,9 +215,8 @@ void TrackerServer::process(const Frame& frame) {
   } catch (const std::invalid_argument& e) {
     return drop(e.what());
   }
-  if (depth.width() != camera.width || depth.height() != camera.height) {
-    return drop("image is " + std::to_string(depth.width()) + "x" + std::to_string(depth.height()) +
-                " but the camera is " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  if (const std::string mismatch = camera.sizeMismatch(depth.width(), depth.height()); !mismatch.empty()) {
+    return drop(mismatch);
   }
 
   st::FrameReport report;

@@ -22,7 +22,8 @@ after the alignment ("timestamp,error_m"), to see which frames it comes from.
 
 int run(int argc, char** argv) {
   using namespace sdf_tracker;
-  const tools::CommandLine args(argc, argv, {"groundtruth", "estimate", "plot", "errors", "estimate-time-offset"}, {"help"});
+  const tools::CommandLine args(argc, argv, {"groundtruth", "estimate", "plot", "errors", "estimate-time-offset"},
+                                {"help"});
   if (args.has("help")) {
     std::cout << kUsage;
     return 0;

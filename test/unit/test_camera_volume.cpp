@@ -96,7 +96,7 @@ TEST(PinholeCamera, ValidateRejectsANonFiniteDistortion) {
 TEST(DepthUndistortion, GivesTheImageAnIdealLensWouldHaveTaken) {
   const PinholeCamera lens = distortedCamera();
   DepthUndistortion undistortion(lens);
-  const PinholeCamera ideal = undistortion.idealCamera();
+  const PinholeCamera ideal = lens.withoutDistortion();
   EXPECT_TRUE(ideal.distortion.isZero());
   const Eigen::Isometry3d T_W_C = synthetic::cameraPose(synthetic::Motion::kDesk, 0.0, 10.0);
   const DepthImage seen = test::renderRoom(T_W_C, lens);

@@ -44,6 +44,14 @@ struct PinholeCamera {
 
   /// Every violated constraint, in words; empty when the camera is usable.
   std::vector<std::string> validate() const;
+  /// Why an image of this size cannot come from this camera, in words; empty when the sizes match.
+  std::string sizeMismatch(int image_width, int image_height) const;
+  /// The same intrinsics without lens distortion: the camera of its undistorted images.
+  PinholeCamera withoutDistortion() const {
+    PinholeCamera ideal = *this;
+    ideal.distortion = LensDistortion();
+    return ideal;
+  }
 
   /// The same lens at another resolution of the same sensor (VGA 640x480 -> QVGA 320x240 -> QQVGA
   /// 160x120, as the reference release scales its parameters). Throws std::invalid_argument when

@@ -20,8 +20,6 @@ class DepthUndistortion {
 
   /// The camera the map was made for (with its distortion).
   const PinholeCamera& camera() const { return camera_; }
-  /// The same intrinsics without distortion: the camera of the undistorted images.
-  PinholeCamera idealCamera() const;
 
   /// `distorted` must have the camera's size (throws std::invalid_argument otherwise). Pixels whose
   /// ray the lens puts outside the image hold no measurement.

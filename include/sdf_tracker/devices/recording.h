@@ -19,7 +19,8 @@ double rosStampOffset(const TumSequence& sequence);
 /// write it there; the drivers read it from there when ~depth_camera_info_url is not set.
 std::string calibrationFileFor(const std::string& recording);
 
-/// Writes a camera_info_manager (camera_calibration_parsers) YAML file for the camera (plumb_bob). Throws std::runtime_error naming the file if it cannot be written.
+/// Writes a camera_info_manager (camera_calibration_parsers) YAML file for the camera, its
+/// distortion as plumb_bob. Throws std::runtime_error naming the file if it cannot be written.
 void writeCalibrationFile(const std::string& path, const PinholeCamera& camera, const std::string& camera_name);
 
 }  // namespace sdf_tracker::devices
