@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <numeric>
+#include <sstream>
 
 #include <image_transport/camera_common.h>
 #include <topic_tools/shape_shifter.h>
@@ -151,41 +152,50 @@ void TrackerServer::frameLoop() {
 }
 
 st::PinholeCamera TrackerServer::cameraFor(const Frame& frame) {
-  if (!options_.intrinsics_from_parameters) {
-    st::PinholeCamera camera = toCamera(*frame.info);
+  st::PinholeCamera camera;
+  std::string distortion_source;
+  if (options_.intrinsics_from_parameters) {
+    camera = camera_settings_.camera();
+    distortion_source = "FocalLength/CenterPoint parameters";
+    sensor_msgs::CameraInfoConstPtr info;
+    {
+      std::lock_guard<std::mutex> lock(mailbox_mutex_);
+      info = last_info_;
+    }
+    if (!warned_intrinsics_ && info && info->K[0] > 0.0 &&
+        (std::abs(info->K[0] - camera.fx) > 1e-3 || std::abs(info->K[2] - camera.cx) > 1e-3)) {
+      ROS_WARN("sdf_tracker: FocalLength/CenterPoint parameters (fx %.2f, cx %.2f) disagree with %s (fx %.2f, cx "
+               "%.2f); using the parameters",
+               camera.fx, camera.cx, info_topic_.c_str(), info->K[0], info->K[2]);
+      warned_intrinsics_ = true;
+    }
+  } else {
+    camera = toCamera(*frame.info);
+    distortion_source = info_topic_;
     // Drivers send D all zero when they know no distortion; for TUM's benchmark recordings the
     // distortion is known (TUM publishes it) and the images are not undistorted.
     if (camera.distortion.isZero() && st::PinholeCamera::tumPublishedDistortion(camera)) {
-      if (!tum_recording_distortion_) {  // decided once, on the first frame
-        const double stamp_s = frame.image->header.stamp.toSec();
-        tum_recording_distortion_ =
-            st::PinholeCamera::tumRecordingDistortion(camera, stamp_s).value_or(st::LensDistortion());
-        const st::LensDistortion& d = *tum_recording_distortion_;
-        if (d.isZero()) {
-          ROS_INFO("sdf_tracker: %s holds TUM benchmark intrinsics, but the stamps are not Unix time as in "
-                   "TUM's recordings: no lens distortion removed", info_topic_.c_str());
-        } else {
-          ROS_INFO("sdf_tracker: %s holds TUM benchmark intrinsics without distortion: removing the lens distortion "
-                   "TUM publishes for them (k1 %.4f k2 %.4f p1 %.4f p2 %.4f k3 %.4f)",
-                   info_topic_.c_str(), d.k1, d.k2, d.p1, d.p2, d.k3);
-        }
+      if (const auto published =
+              st::PinholeCamera::tumRecordingDistortion(camera, frame.image->header.stamp.toSec())) {
+        camera.distortion = *published;
+        distortion_source = "TUM's published calibration (" + info_topic_ + " holds TUM's intrinsics, D all zero)";
+      } else {
+        distortion_source += ": TUM's intrinsics, but not stamped in Unix time as TUM's recordings are";
       }
-      camera.distortion = *tum_recording_distortion_;
     }
-    return camera;
   }
-  const st::PinholeCamera camera = camera_settings_.camera();
-  sensor_msgs::CameraInfoConstPtr info;
-  {
-    std::lock_guard<std::mutex> lock(mailbox_mutex_);
-    info = last_info_;
-  }
-  if (!warned_intrinsics_ && info && info->K[0] > 0.0 &&
-      (std::abs(info->K[0] - camera.fx) > 1e-3 || std::abs(info->K[2] - camera.cx) > 1e-3)) {
-    ROS_WARN("sdf_tracker: FocalLength/CenterPoint parameters (fx %.2f, cx %.2f) disagree with %s (fx %.2f, cx %.2f); "
-             "using the parameters",
-             camera.fx, camera.cx, info_topic_.c_str(), info->K[0], info->K[2]);
-    warned_intrinsics_ = true;
+  if (camera != announced_camera_) {
+    const st::LensDistortion& d = camera.distortion;
+    std::ostringstream lens;
+    if (d.isZero()) {
+      lens << "no lens distortion (" << distortion_source << ")";
+    } else {
+      lens << "lens distortion removed from every image: k1 " << d.k1 << " k2 " << d.k2 << " p1 " << d.p1 << " p2 "
+           << d.p2 << " k3 " << d.k3 << " (" << distortion_source << ")";
+    }
+    ROS_INFO("sdf_tracker: camera %dx%d, fx %.2f fy %.2f cx %.2f cy %.2f; %s", camera.width, camera.height, camera.fx,
+             camera.fy, camera.cx, camera.cy, lens.str().c_str());
+    announced_camera_ = camera;
   }
   return camera;
 }

@@ -81,8 +81,8 @@ class TrackerServer {
   ros::Time last_stamp_;
   std::vector<double> frame_ms_;  ///< the node's whole cost of each processed frame
   bool warned_intrinsics_ = false;
-  /// For camera_info with TUM's intrinsics and no distortion: what to remove, decided on the first frame.
-  std::optional<sdf_tracker::LensDistortion> tum_recording_distortion_;
+  /// The camera last said in the log (said again when it changes).
+  std::optional<sdf_tracker::PinholeCamera> announced_camera_;
   bool lost_ = false;
 
   std::unique_ptr<MapServices> services_;
