@@ -4,7 +4,6 @@ each run's summary.json), and fr1_xyz's error against time and against a clock s
 <date>_accuracy.md and its plots into the results folder."""
 import csv
 import datetime
-import json
 import os
 import sys
 
@@ -12,6 +11,8 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+import summaries  # noqa: E402  (bench/summaries.py, beside this script)
 
 # Issue 9's acceptance, ATE RMSE in metres, default preset.
 TARGETS_M = {"tum_fr1_xyz": 0.010, "redkitchen": 0.020, "synthetic_loop": 0.005, "synthetic_planar": 0.020}
@@ -26,14 +27,8 @@ ABLATION = [("off_undistortion", "lens distortion not removed"),
 
 
 def load(runs_dir):
-    runs = {}
-    for name in sorted(os.listdir(runs_dir)):
-        path = os.path.join(runs_dir, name, "summary.json")
-        if os.path.isfile(path):
-            with open(path) as f:
-                variant, sequence = name.split("__", 1)
-                runs[(variant, sequence)] = json.load(f)
-    return runs
+    """{(variant, sequence): summary} of the runs, whose folders are named VARIANT__SEQUENCE."""
+    return {tuple(name.split("__", 1)): run for name, run in summaries.load(runs_dir).items()}
 
 
 def ate(run):

@@ -3,7 +3,8 @@
 # defines real_sequences: `real_sequences "$@"` fills the array `sequences` with the arguments, or
 # with TUM fr1_xyz and 7-Scenes redkitchen from $data, saying SKIPPED for each one missing; and
 # synthetic_sequence: `synthetic_sequence BIN WORK MOTION` prints the folder of the bench's synthetic
-# sequence with that motion (300 frames, seed 21), generating it under WORK the first time.
+# sequence with that motion (300 frames, seed 21), generating it under WORK the first time; and
+# require_matplotlib, which installs Debian's matplotlib for the reports' plots when it is missing.
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 data="${SDF_TRACKER_DATA:-$repo/../shared/data}"
 
@@ -20,4 +21,9 @@ synthetic_sequence() {
   local dir="$work/synthetic_$motion"
   [ -f "$dir/depth.txt" ] || "$bin/sdf_tracker_synth" --output "$dir" --motion "$motion" --frames 300 --seed 21 >/dev/null
   echo "$dir"
+}
+
+require_matplotlib() {
+  dpkg-query -W -f='${Status}' python3-matplotlib 2>/dev/null | grep -q "install ok installed" ||
+    { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3-matplotlib >/dev/null; }
 }

@@ -12,22 +12,14 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+import summaries  # noqa: E402  (bench/summaries.py, beside this script)
+
 # The reference release, built and run on this machine kind (figures given in the issue).
 REFERENCE_MS = 176.0
 REFERENCE_ATE_M = 0.031
 TARGET_MS_256 = 33.0
 TARGET_MS_200 = 29.0
 TARGET_RSS_512_MB = 1024.0
-
-
-def load(runs_dir):
-    runs = {}
-    for name in sorted(os.listdir(runs_dir)):
-        path = os.path.join(runs_dir, name, "summary.json")
-        if os.path.isfile(path):
-            with open(path) as f:
-                runs[name] = json.load(f)
-    return runs
 
 
 def fmt(value, digits=1, scale=1.0):
@@ -39,7 +31,7 @@ def ate_cm(run):
 
 
 def main(runs_dir, results_dir):
-    runs = load(runs_dir)
+    runs = summaries.load(runs_dir)
     if not runs:
         sys.exit("no runs with a summary.json under " + runs_dir)
     today = datetime.date.today().isoformat()

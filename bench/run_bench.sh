@@ -12,11 +12,9 @@ work="$repo/build/bench"
 results="$repo/bench/results"
 mkdir -p "$work/runs" "$results"
 
-bash "$repo/scripts/install_dependencies.sh"
-dpkg-query -W -f='${Status}' python3-matplotlib 2>/dev/null | grep -q "install ok installed" ||
-  { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3-matplotlib >/dev/null; }
-bash "$repo/scripts/build.sh"
-bin="$repo/build/ws/devel/lib/sdf_tracker"
+# shellcheck source=../scripts/workspace.sh
+source "$repo/scripts/workspace.sh"
+require_matplotlib
 
 sequences=()
 for motion in desk slow fast planar loop; do

@@ -18,6 +18,17 @@ Eigen::Vector2d LensDistortion::undistort(const Eigen::Vector2d& distorted) cons
   return ideal;
 }
 
+std::string LensDistortion::summary(const std::string& source) const {
+  std::ostringstream text;
+  if (isZero()) {
+    text << "lens distortion: none (" << source << ")";
+  } else {
+    text << "lens distortion removed from every image: k1 " << k1 << " k2 " << k2 << " p1 " << p1 << " p2 " << p2
+         << " k3 " << k3 << " (" << source << ")";
+  }
+  return text.str();
+}
+
 std::vector<std::string> PinholeCamera::validate() const {
   Violations v;
   v.requirePositive("fx", fx);
@@ -97,10 +108,19 @@ std::optional<LensDistortion> PinholeCamera::tumPublishedDistortion(const Pinhol
   return std::nullopt;
 }
 
-std::optional<LensDistortion> PinholeCamera::tumRecordingDistortion(const PinholeCamera& camera,
-                                                                    double first_stamp_s) {
-  if (!(first_stamp_s >= kUnixTimeFrom_s)) return std::nullopt;
-  return tumPublishedDistortion(camera);
+LensDistortion PinholeCamera::unstatedDistortion(const PinholeCamera& camera, double first_stamp_s,
+                                                 std::string* why) {
+  const std::optional<LensDistortion> published = tumPublishedDistortion(camera);
+  if (!published) {
+    why->clear();
+    return LensDistortion();
+  }
+  if (!(first_stamp_s >= kUnixTimeFrom_s)) {
+    *why = "TUM's intrinsics, but not stamped in Unix time as TUM's recordings are";
+    return LensDistortion();
+  }
+  *why = "TUM's published calibration for these intrinsics";
+  return *published;
 }
 
 }  // namespace sdf_tracker

@@ -277,7 +277,8 @@ std::vector<ParameterSpec> buildTable() {
                             {1e-3, 1e-4, 1e-4}, kLive, kAll,
                             [](auto& s) -> auto& { return s.pipeline.tracker.min_inverse_condition; }));
   t.push_back(bound<bool>("SolveConstrainedDirections", "",
-                          "degenerate geometry: solve the directions it constrains, predict the rest (off: the frame fails)",
+                          "degenerate geometry: solve the directions it constrains, predict the rest "
+                          "(off: the frame fails)",
                           {}, {true, false, false}, kLive, kAll,
                           [](auto& s) -> auto& { return s.pipeline.tracker.solve_constrained_directions; }));
   t.push_back(bound<bool>("MotionPrediction", "",

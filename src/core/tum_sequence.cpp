@@ -89,15 +89,11 @@ TumSequence TumSequence::open(const std::string& directory, const SequenceOption
   if (options.distortion) {
     sequence.camera_.distortion = *options.distortion;
     sequence.distortion_source_ = "options";
-  } else if (!distortion_given && PinholeCamera::tumPublishedDistortion(sequence.camera_)) {
-    // TUM's intrinsics without a word on distortion: TUM's own recording, or data made for them?
-    if (const auto published =
-            PinholeCamera::tumRecordingDistortion(sequence.camera_, sequence.frames_.front().timestamp_s)) {
-      sequence.camera_.distortion = *published;
-      sequence.distortion_source_ = "TUM's published calibration for these intrinsics";
-    } else {
-      sequence.distortion_source_ = "TUM's intrinsics, but not stamped in Unix time as TUM's recordings are";
-    }
+  } else if (!distortion_given) {
+    std::string why;
+    sequence.camera_.distortion =
+        PinholeCamera::unstatedDistortion(sequence.camera_, sequence.frames_.front().timestamp_s, &why);
+    if (!why.empty()) sequence.distortion_source_ = why;
   }
   const auto violations = sequence.camera_.validate();
   if (!violations.empty()) throw std::runtime_error(directory + ": invalid intrinsics: " + violations.front());

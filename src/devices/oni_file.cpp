@@ -77,7 +77,8 @@ OniDepthWriter::OniDepthWriter(std::string path, const PinholeCamera& camera, in
   writeIntProperty("xnPixelFormat", kPixelFormatGrey16);
   writeIntProperty("oniPixelFormat", kOniPixelFormatDepth1mm);
   // OpenNI describes intrinsics by the field of view; the principal point goes to the calibration file.
-  const double fov[2] = {2.0 * std::atan(camera.width / (2.0 * camera.fx)), 2.0 * std::atan(camera.height / (2.0 * camera.fy))};
+  const double fov[2] = {2.0 * std::atan(camera.width / (2.0 * camera.fx)),
+                         2.0 * std::atan(camera.height / (2.0 * camera.fy))};
   writeProperty(kGeneralProperty, "xnFOV", fov, sizeof(fov));
   // OniFile hands out no frame of a stream without a cropping state, so it is recorded (off), and
   // the mirroring state (off) with it.

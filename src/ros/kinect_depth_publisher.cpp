@@ -33,7 +33,7 @@
 namespace {
 
 namespace dev = sdf_tracker::devices;
-
+constexpr double kReopenInterval_s = sdf_tracker_ros::DepthCameraPublisher::kReopenInterval_s;
 
 /// libfreenect's device calibration, when the library in use has it: fakenect's stand-in
 /// library does not, so the function is looked up at run time rather than linked.
@@ -144,7 +144,8 @@ class KinectDriver {
     freenect_set_user(device_, this);
     freenect_set_depth_callback(device_, &KinectDriver::onDepth);
     ROS_INFO("kinect_depth_publisher: Kinect open, %dx%d %s depth, %s calibration", mode->width, mode->height,
-             publisher_.registered() ? "registered" : "11-bit", device_zero_plane ? "the device's" : "typical zero-plane");
+             publisher_.registered() ? "registered" : "11-bit",
+             device_zero_plane ? "the device's" : "typical zero-plane");
     return true;
   }
 
@@ -178,10 +179,10 @@ class KinectDriver {
         return 0;
       }
       ROS_ERROR("kinect_depth_publisher: lost the Kinect after %zu frames; trying to re-open it every %.0f s",
-                frames_, sdf_tracker_ros::DepthCameraPublisher::kReopenInterval_s);
+                frames_, kReopenInterval_s);
       close();
       while (ros::ok() && device_ == nullptr) {
-        ros::WallDuration(sdf_tracker_ros::DepthCameraPublisher::kReopenInterval_s).sleep();
+        ros::WallDuration(kReopenInterval_s).sleep();
         if (freenect_num_devices(context_) > 0 && open()) ROS_INFO("kinect_depth_publisher: the Kinect is back");
       }
     }

@@ -24,6 +24,7 @@
 namespace {
 
 constexpr int kFrameTimeout_ms = 2000;
+constexpr double kReopenInterval_s = sdf_tracker_ros::DepthCameraPublisher::kReopenInterval_s;
 
 class OpenNI2Driver {
  public:
@@ -164,10 +165,10 @@ class OpenNI2Driver {
         return 1;
       }
       ROS_ERROR("openni2_depth_publisher: no depth frame for %d ms (%s); re-opening the camera every %.0f s",
-                kFrameTimeout_ms, openni::OpenNI::getExtendedError(), sdf_tracker_ros::DepthCameraPublisher::kReopenInterval_s);
+                kFrameTimeout_ms, openni::OpenNI::getExtendedError(), kReopenInterval_s);
       close();
       while (ros::ok()) {
-        ros::WallDuration(sdf_tracker_ros::DepthCameraPublisher::kReopenInterval_s).sleep();
+        ros::WallDuration(kReopenInterval_s).sleep();
         if (device_.open(device_id_.empty() ? openni::ANY_DEVICE : device_id_.c_str()) == openni::STATUS_OK &&
             depth_.create(device_, openni::SENSOR_DEPTH) == openni::STATUS_OK && configureLiveCamera()) {
           ROS_INFO("openni2_depth_publisher: the camera is back");

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cstdio>
 #include <numeric>
-#include <sstream>
 
 #include <image_transport/camera_common.h>
 #include <topic_tools/shape_shifter.h>
@@ -172,29 +171,16 @@ st::PinholeCamera TrackerServer::cameraFor(const Frame& frame) {
   } else {
     camera = toCamera(*frame.info);
     distortion_source = info_topic_;
-    // Drivers send D all zero when they know no distortion; for TUM's benchmark recordings the
-    // distortion is known (TUM publishes it) and the images are not undistorted.
-    if (camera.distortion.isZero() && st::PinholeCamera::tumPublishedDistortion(camera)) {
-      if (const auto published =
-              st::PinholeCamera::tumRecordingDistortion(camera, frame.image->header.stamp.toSec())) {
-        camera.distortion = *published;
-        distortion_source = "TUM's published calibration (" + info_topic_ + " holds TUM's intrinsics, D all zero)";
-      } else {
-        distortion_source += ": TUM's intrinsics, but not stamped in Unix time as TUM's recordings are";
-      }
+    // Drivers send D all zero when they know no distortion: the same rule as a sequence's.
+    if (camera.distortion.isZero()) {
+      std::string why;
+      camera.distortion = st::PinholeCamera::unstatedDistortion(camera, frame.image->header.stamp.toSec(), &why);
+      if (!why.empty()) distortion_source += " with D all zero; " + why;
     }
   }
   if (camera != announced_camera_) {
-    const st::LensDistortion& d = camera.distortion;
-    std::ostringstream lens;
-    if (d.isZero()) {
-      lens << "no lens distortion (" << distortion_source << ")";
-    } else {
-      lens << "lens distortion removed from every image: k1 " << d.k1 << " k2 " << d.k2 << " p1 " << d.p1 << " p2 "
-           << d.p2 << " k3 " << d.k3 << " (" << distortion_source << ")";
-    }
     ROS_INFO("sdf_tracker: camera %dx%d, fx %.2f fy %.2f cx %.2f cy %.2f; %s", camera.width, camera.height, camera.fx,
-             camera.fy, camera.cx, camera.cy, lens.str().c_str());
+             camera.fy, camera.cx, camera.cy, camera.distortion.summary(distortion_source).c_str());
     announced_camera_ = camera;
   }
   return camera;

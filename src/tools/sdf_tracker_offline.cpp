@@ -57,20 +57,23 @@ Tracks a depth camera through a TUM-layout sequence and reconstructs the scene.
   --list-params         print every parameter with its value in the chosen preset and exit
 )";
 
-st::LensDistortion parseDistortion(const std::string& text) {
-  std::vector<double> v;
+/// The comma-separated numbers of `option`'s value.
+std::vector<double> parseNumberList(const std::string& option, const std::string& text) {
+  std::vector<double> values;
   std::istringstream in(text);
   std::string item;
-  while (std::getline(in, item, ',')) v.push_back(st::parseNumber("--distortion", item));
+  while (std::getline(in, item, ',')) values.push_back(st::parseNumber(option, item));
+  return values;
+}
+
+st::LensDistortion parseDistortion(const std::string& text) {
+  const std::vector<double> v = parseNumberList("--distortion", text);
   if (v.size() != 5) throw std::invalid_argument("--distortion: expected K1,K2,P1,P2,K3, got \"" + text + "\"");
   return {v[0], v[1], v[2], v[3], v[4]};
 }
 
 st::PinholeCamera parseIntrinsics(const std::string& text, const st::PinholeCamera& base) {
-  std::vector<double> v;
-  std::istringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) v.push_back(st::parseNumber("--intrinsics", item));
+  const std::vector<double> v = parseNumberList("--intrinsics", text);
   if (v.size() != 4 && v.size() != 6) {
     throw std::invalid_argument("--intrinsics: expected FX,FY,CX,CY[,W,H], got \"" + text + "\"");
   }
@@ -163,13 +166,7 @@ int run(int argc, char** argv) {
             << camera.height << ", fx " << camera.fx << " fy " << camera.fy << " cx " << camera.cx << " cy "
             << camera.cy << " (" << sequence.intrinsicsSource() << "), depth factor " << sequence.depthFactor()
             << "\n";
-  const st::LensDistortion& d = camera.distortion;
-  if (d.isZero()) {
-    std::cout << "lens distortion: none (" << sequence.distortionSource() << ")\n";
-  } else {
-    std::cout << "lens distortion removed from every image: k1 " << d.k1 << " k2 " << d.k2 << " p1 " << d.p1 << " p2 "
-              << d.p2 << " k3 " << d.k3 << " (" << sequence.distortionSource() << ")\n";
-  }
+  std::cout << camera.distortion.summary(sequence.distortionSource()) << "\n";
   st::SdfPipeline pipeline(settings.pipeline);
   if (args.has("load-volume")) {
     pipeline.setVolume(st::io::readVti(args.get("load-volume"), settings.pipeline.volume.compact_voxels));
@@ -216,9 +213,8 @@ int run(int argc, char** argv) {
     frames_csv << std::fixed << std::setprecision(6) << sequence.timestamp(i) << ',' << st::toString(t.status) << ','
                << joinIterations(t.iterations_per_level) << ',' << std::setprecision(6) << t.rms_residual_m << ','
                << t.valid_points << ',' << std::setprecision(6) << t.inverse_condition << ',' << t.constrained_rank
-               << ',' << std::setprecision(3)
-               << report.tracking_ms << ',' << report.fusion_ms << ',' << (report.fused ? 1 : 0) << ',' << message
-               << '\n';
+               << ',' << std::setprecision(3) << report.tracking_ms << ',' << report.fusion_ms << ','
+               << (report.fused ? 1 : 0) << ',' << message << '\n';
     progress.update(i + 1);
   }
   progress.finish();
@@ -258,8 +254,9 @@ int run(int argc, char** argv) {
   std::ostringstream json;
   json << "{\n  \"sequence\": " << jsonString(sequence_dir) << ",\n  \"preset\": "
        << jsonString(args.get("preset", "default")) << ",\n  \"frames\": " << sequence.size()
-       << ",\n  \"failed_frames\": " << failed << ",\n  \"degenerate_frames\": " << degenerate << ",\n  \"grid\": [" << v.dims.x() << ", " << v.dims.y() << ", "
-       << v.dims.z() << "],\n  \"voxel_count\": " << pipeline.volume().voxelCount()
+       << ",\n  \"failed_frames\": " << failed << ",\n  \"degenerate_frames\": " << degenerate
+       << ",\n  \"grid\": [" << v.dims.x() << ", " << v.dims.y() << ", " << v.dims.z()
+       << "],\n  \"voxel_count\": " << pipeline.volume().voxelCount()
        << ",\n  \"voxel_size_m\": " << jsonNumber(v.voxel_size_m)
        << ",\n  \"compact_voxels\": " << (v.compact_voxels ? "true" : "false")
 #ifdef _OPENMP

@@ -79,10 +79,14 @@ TEST(LensDistortion, TumsPublishedDistortionBelongsToTumsIntrinsicsAndRecordings
   EXPECT_FALSE(PinholeCamera::tumPublishedDistortion(PinholeCamera()).has_value()) << "a generic Kinect";
   EXPECT_FALSE(PinholeCamera::tumPublishedDistortion(test::testCamera()).has_value()) << "another resolution";
   // Assumed for a recording only when it is stamped like TUM's (Unix time), not for generated data.
-  EXPECT_TRUE(PinholeCamera::tumRecordingDistortion(PinholeCamera::tumFreiburg1(), 1305031102.16).has_value());
-  EXPECT_FALSE(PinholeCamera::tumRecordingDistortion(PinholeCamera::tumFreiburg1(), 0.0).has_value());
-  EXPECT_FALSE(PinholeCamera::tumRecordingDistortion(PinholeCamera::tumFreiburg1(), std::nan("")).has_value());
-  EXPECT_FALSE(PinholeCamera::tumRecordingDistortion(PinholeCamera(), 1305031102.16).has_value());
+  std::string why;
+  EXPECT_EQ(PinholeCamera::unstatedDistortion(PinholeCamera::tumFreiburg1(), 1305031102.16, &why), *freiburg1);
+  EXPECT_NE(why.find("TUM's published"), std::string::npos) << why;
+  EXPECT_TRUE(PinholeCamera::unstatedDistortion(PinholeCamera::tumFreiburg1(), 0.0, &why).isZero());
+  EXPECT_NE(why.find("Unix time"), std::string::npos) << why;
+  EXPECT_TRUE(PinholeCamera::unstatedDistortion(PinholeCamera::tumFreiburg1(), std::nan(""), &why).isZero());
+  EXPECT_TRUE(PinholeCamera::unstatedDistortion(PinholeCamera(), 1305031102.16, &why).isZero());
+  EXPECT_EQ(why, "") << "nothing to explain for a camera that is not TUM's";
 }
 
 TEST(PinholeCamera, ValidateRejectsANonFiniteDistortion) {

@@ -143,7 +143,6 @@ TEST(Pipeline, MotionPredictionBridgesDroppedFramesWithFewerIterations) {
   EXPECT_LT(error_predicted, error_plain + 0.001) << "prediction must not make the estimate worse";
 }
 
-}  // namespace
 TEST(Pipeline, DegenerateFramesAreReportedWithTheirRankTrackedWhereConstrainedAndFused) {
   // Sliding along a single wall: the distance to it and the tilts are seen, the slide and the roll
   // about the wall's normal are not.
@@ -177,4 +176,5 @@ TEST(Pipeline, DegenerateFramesAreReportedWithTheirRankTrackedWhereConstrainedAn
   EXPECT_EQ(pipeline.consecutiveFailures(), 0);
 }
 
+}  // namespace
 }  // namespace sdf_tracker

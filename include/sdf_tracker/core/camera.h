@@ -27,6 +27,9 @@ struct LensDistortion {
   bool operator==(const LensDistortion& o) const {
     return k1 == o.k1 && k2 == o.k2 && p1 == o.p1 && p2 == o.p2 && k3 == o.k3;
   }
+  /// For the user: "lens distortion: none (<source>)" or "lens distortion removed from every
+  /// image: k1 .. k3 .. (<source>)".
+  std::string summary(const std::string& source) const;
 };
 
 /// Intrinsics of a depth camera, in pixels. The optical frame is x right, y down, z forward
@@ -86,11 +89,12 @@ struct PinholeCamera {
   /// that copy TUM's intrinsics usually leave the distortion out.
   static std::optional<LensDistortion> tumPublishedDistortion(const PinholeCamera& camera);
 
-  /// The lens distortion to assume for a recording that states none: TUM's published one when the
-  /// intrinsics are a TUM camera's and the recording is stamped in Unix time, as TUM's recordings
-  /// are; nothing otherwise. Sequences generated for TUM's intrinsics (a simulator's) count time
-  /// from about 0 and were not taken through TUM's lens.
-  static std::optional<LensDistortion> tumRecordingDistortion(const PinholeCamera& camera, double first_stamp_s);
+  /// The lens distortion to assume for a recording that states none (intrinsics.txt without the
+  /// columns, camera_info with D all zero), and in `why` the reason in words ("" when there is
+  /// nothing to explain): TUM's published distortion when the intrinsics are a TUM camera's and
+  /// the recording is stamped in Unix time, as TUM's recordings are; else none. Sequences generated
+  /// for TUM's intrinsics (a simulator's) count time from about 0 and were not taken through TUM's lens.
+  static LensDistortion unstatedDistortion(const PinholeCamera& camera, double first_stamp_s, std::string* why);
   /// Stamps from here on are Unix time (2001-09-09); a sequence's own clock starts near 0.
   static constexpr double kUnixTimeFrom_s = 1e9;
 };
