@@ -18,9 +18,11 @@ add_library(sdf_tracker_core
   ${SDF_TRACKER_ROOT}/src/core/raycaster.cpp
   ${SDF_TRACKER_ROOT}/src/core/se3.cpp
   ${SDF_TRACKER_ROOT}/src/core/sensor_model.cpp
+  ${SDF_TRACKER_ROOT}/src/core/sparse_tsdf_map.cpp
   ${SDF_TRACKER_ROOT}/src/core/surface.cpp
   ${SDF_TRACKER_ROOT}/src/core/synthetic.cpp
   ${SDF_TRACKER_ROOT}/src/core/tracker.cpp
+  ${SDF_TRACKER_ROOT}/src/core/tsdf_map.cpp
   ${SDF_TRACKER_ROOT}/src/core/tsdf_volume.cpp
   ${SDF_TRACKER_ROOT}/src/core/tum_sequence.cpp
 )
@@ -67,6 +69,7 @@ set(SDF_TRACKER_CORE_TEST_SOURCES
   ${SDF_TRACKER_UNIT_TEST_DIR}/test_parameters.cpp
   ${SDF_TRACKER_UNIT_TEST_DIR}/test_pipeline.cpp
   ${SDF_TRACKER_UNIT_TEST_DIR}/test_raycaster.cpp
+  ${SDF_TRACKER_UNIT_TEST_DIR}/test_sparse_map.cpp
 )
 set(SDF_TRACKER_TOOLS_TEST_SOURCES ${SDF_TRACKER_UNIT_TEST_DIR}/test_main.cpp ${SDF_TRACKER_UNIT_TEST_DIR}/test_tools.cpp
   ${SDF_TRACKER_UNIT_TEST_DIR}/test_devices.cpp)

@@ -269,6 +269,15 @@ std::vector<ParameterSpec> buildTable() {
   t.push_back(bound<bool>("NormalizeResiduals", "", "divide residuals by the field's gradient norm (metric distances)",
                           {}, {true, false, false}, kLive, kAll,
                           [](auto& s) -> auto& { return s.pipeline.tracker.normalize_by_gradient; }));
+  t.push_back(ParameterSpec{
+      "MapType", ParameterType::kText, "",
+      "dense: one grid of GridSizeX/Y/Z voxels (fixed extent); sparse: 8^3-voxel blocks allocated where surfaces "
+      "are seen (grows with the scene)",
+      std::nullopt, {"dense", "sparse"}, nullptr, same(std::string("dense")), kAtStart, kAll,
+      [](S& s, const ParameterValue& v) {
+        s.pipeline.volume.type = std::get<std::string>(v) == "sparse" ? MapType::kSparse : MapType::kDense;
+      },
+      [](const S& s) { return ParameterValue(std::string(toString(s.pipeline.volume.type))); }});
   t.push_back(bound<bool>("CompactVoxels", "", "4-byte voxels (half the memory; distance and weight quantised)", {},
                           same(false), kAtStart, kAll, [](auto& s) -> auto& { return s.pipeline.volume.compact_voxels; }));
   t.push_back(bound<int>("MinValidPoints", "", "fewer tracked points than this: too_few_points", closed(6, 1e8),
@@ -346,6 +355,9 @@ std::vector<std::string> Settings::validate() const {
                          " m, PositiveTruncationDistance " + text(p.volume.positive_truncation_m) +
                          " m) must reach at least one CellSize (" + text(p.volume.voxel_size_m) +
                          " m) on each side of the surface");
+  }
+  if (p.volume.compact_voxels && p.volume.type == MapType::kSparse) {
+    v.require(false, "CompactVoxels=true applies to MapType=dense only (MapType is sparse)");
   }
   if (p.volume.compact_voxels && p.integrator.max_weight > VoxelCodec<CompactVoxel>::kMaxWeight) {
     v.require(false, "MaxWeight must be at most " + text(VoxelCodec<CompactVoxel>::kMaxWeight) +

@@ -63,22 +63,23 @@ Eigen::Vector3d SdfPipeline::volumeOriginFor(const PipelineConfig& config) {
 
 SdfPipeline::SdfPipeline(const PipelineConfig& config) : config_(config) {
   throwIfInvalid("pipeline config", config.validate());
-  volume_ = std::make_unique<TsdfVolume>(placedVolume(config));
+  map_ = makeMap(placedVolume(config));
   integrator_ = std::make_unique<Integrator>(config.integrator);
   tracker_ = std::make_unique<Tracker>(config.tracker);
 }
 
 void SdfPipeline::reset() {
-  volume_->clear();
+  map_->clear();
   T_W_C_ = T_W_C_last_fused_ = T_W_C_previous_ = Eigen::Isometry3d::Identity();
   map_initialised_ = false;
   consecutive_failures_ = 0;
   tracked_since_start_ = 0;
 }
 
-void SdfPipeline::setVolume(TsdfVolume volume) {
-  volume_ = std::make_unique<TsdfVolume>(std::move(volume));
-  config_.volume = volume_->config();
+void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map) {
+  if (!map) throw std::invalid_argument("setMap: no map");
+  map_ = std::move(map);
+  config_.volume = map_->config();
   T_W_C_ = T_W_C_last_fused_ = T_W_C_previous_ = Eigen::Isometry3d::Identity();
   map_initialised_ = true;
   consecutive_failures_ = 0;
@@ -151,7 +152,7 @@ FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCame
 
   if (config_.reset_after_failures > 0 && consecutive_failures_ >= config_.reset_after_failures) {
     const Eigen::Isometry3d held = T_W_C_;
-    volume_->clear();
+    map_->clear();
     map_initialised_ = false;
     consecutive_failures_ = 0;
     T_W_C_ = T_W_C_last_fused_ = held;
@@ -167,10 +168,10 @@ FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCame
   } else {
     const auto start = std::chrono::steady_clock::now();
     const Eigen::Isometry3d predicted = predictPose(timestamp_s);
-    report.track = tracker_->track(filtered, ideal_camera, *volume_, predicted);
+    report.track = tracker_->track(filtered, ideal_camera, *map_, predicted);
     if (!report.track.tracked() && !predicted.isApprox(T_W_C_)) {
       // The prediction may have led astray (the camera stopped or turned): try from the last pose.
-      TrackResult from_last = tracker_->track(filtered, ideal_camera, *volume_, T_W_C_);
+      TrackResult from_last = tracker_->track(filtered, ideal_camera, *map_, T_W_C_);
       if (from_last.tracked()) report.track = std::move(from_last);
     }
     report.tracking_ms = millisecondsSince(start);
@@ -191,7 +192,7 @@ FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCame
   const double change = std::hypot(motion.translation().norm(), rotationAngle(motion));
   if (report.initialised_map || change >= config_.min_pose_change_to_fuse) {
     const auto start = std::chrono::steady_clock::now();
-    integrator_->integrate(filtered, ideal_camera, T_W_C_, volume_.get());
+    integrator_->integrate(filtered, ideal_camera, T_W_C_, map_.get());
     report.fusion_ms = millisecondsSince(start);
     report.fused = true;
     T_W_C_last_fused_ = T_W_C_;

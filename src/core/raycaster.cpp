@@ -14,16 +14,16 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 /// Depth (along the optical axis) at which the ray p(z) = o + z * dir crosses zero, marching from
 /// z_near to z_far; NaN if it does not. dir has unit z component in the camera frame.
-float marchToSurface(const TsdfVolume& volume, const Eigen::Vector3f& origin_W, const Eigen::Vector3f& dir_W,
+float marchToSurface(const TsdfMap& map, const Eigen::Vector3f& origin_W, const Eigen::Vector3f& dir_W,
                      float z_near, float z_far) {
   const float ray_scale = dir_W.norm();  // metres of ray per metre of depth
-  const float min_step = 0.5f * volume.voxelSize() / ray_scale;
+  const float min_step = 0.5f * map.voxelSize() / ray_scale;
   float z = z_near;
   float previous_d = kNaN;
   float previous_z = z;
   while (z < z_far) {
     float d;
-    if (volume.sampleDistance(origin_W + z * dir_W, &d)) {
+    if (map.sampleDistance(origin_W + z * dir_W, &d)) {
       if (d < 0.0f && previous_d > 0.0f) {
         return previous_z + (z - previous_z) * previous_d / (previous_d - d);
       }
@@ -39,14 +39,14 @@ float marchToSurface(const TsdfVolume& volume, const Eigen::Vector3f& origin_W, 
 }
 
 /// Starts at a measured depth and walks towards the zero crossing by the field's own distances.
-float refineFromSeed(const TsdfVolume& volume, const Eigen::Vector3f& origin_W, const Eigen::Vector3f& dir_W,
+float refineFromSeed(const TsdfMap& map, const Eigen::Vector3f& origin_W, const Eigen::Vector3f& dir_W,
                      float z_seed, int max_steps) {
   const float ray_scale = dir_W.norm();
-  const float tolerance = 0.01f * volume.voxelSize();
+  const float tolerance = 0.01f * map.voxelSize();
   float z = z_seed;
   for (int step = 0; step < max_steps; ++step) {
     float d;
-    if (!volume.sampleDistance(origin_W + z * dir_W, &d)) return kNaN;
+    if (!map.sampleDistance(origin_W + z * dir_W, &d)) return kNaN;
     if (std::fabs(d) < tolerance) break;
     z += d / ray_scale;
   }
@@ -64,7 +64,7 @@ std::vector<std::string> RaycastConfig::validate() const {
   return v.list();
 }
 
-RaycastImage raycast(const TsdfVolume& volume, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C,
+RaycastImage raycast(const TsdfMap& map, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C,
                      const RaycastConfig& config, const DepthImage* seed) {
   throwIfInvalid("raycast config", config.validate());
   RaycastImage out;
@@ -87,13 +87,13 @@ RaycastImage raycast(const TsdfVolume& volume, const PinholeCamera& camera, cons
       if (seed) {
         const float z_seed = seed->at(u, v);
         z = DepthImage::isMeasurement(z_seed)
-                ? refineFromSeed(volume, origin_W, dir_W, z_seed, config.max_refinement_steps)
+                ? refineFromSeed(map, origin_W, dir_W, z_seed, config.max_refinement_steps)
                 : kNaN;
       } else {
-        z = marchToSurface(volume, origin_W, dir_W, z_near, z_far);
+        z = marchToSurface(map, origin_W, dir_W, z_near, z_far);
       }
       FieldSample s;
-      if (!std::isfinite(z) || !volume.sample(origin_W + z * dir_W, &s)) continue;
+      if (!std::isfinite(z) || !map.sample(origin_W + z * dir_W, &s)) continue;
       out.depth.at(u, v) = z;
       const float g = s.gradient.norm();
       if (g > 0.0f) out.normals_C[static_cast<size_t>(v) * camera.width + u] = R_W_C.transpose() * s.gradient / g;

@@ -63,12 +63,12 @@ std::vector<Eigen::Vector3f> backProjectSubsampled(const DepthImage& depth, cons
 /// Builds the normal equations at pose T_W_C. The increment is expressed about the camera centre c
 /// (world axes), so rotation and translation stay decoupled wherever the volume's origin lies:
 /// d/dxi D(exp(xi) (p - c) + c) = [ (p - c) x grad D ; grad D ].
-NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_C, const TsdfVolume& volume,
+NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_C, const TsdfMap& map,
                                      const Eigen::Isometry3d& T_W_C, float huber_k, const DepthNoiseModel* noise,
                                      bool normalize_by_gradient) {
   const Eigen::Isometry3f T = T_W_C.cast<float>();
   const Eigen::Vector3f c = T.translation();
-  const float dmax = volume.positiveTruncation();
+  const float dmax = map.positiveTruncation();
   const float reference_sigma = noise ? noise->referenceSigma() : 1.0f;
   const int n = static_cast<int>(points_C.size());
   NormalEquations sum;
@@ -76,7 +76,7 @@ NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_
   for (int idx = 0; idx < n; ++idx) {
     const Eigen::Vector3f p_W = T * points_C[idx];
     FieldSample s;
-    if (!volume.sample(p_W, &s) || !(std::fabs(s.distance_m) < dmax)) continue;
+    if (!map.sample(p_W, &s) || !(std::fabs(s.distance_m) < dmax)) continue;
     if (normalize_by_gradient) {
       // A projective field overstates Euclidean distance by 1/cos(viewing angle) and so does
       // its gradient norm: dividing by it makes residuals metric and consistent across views.
@@ -190,7 +190,7 @@ Tracker::Tracker(const TrackerConfig& config) : config_(config) {
   throwIfInvalid("tracker config", config.validate());
 }
 
-TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera, const TsdfVolume& volume,
+TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera, const TsdfMap& map,
                            const Eigen::Isometry3d& T_W_C_guess) const {
   TrackResult result;
   result.T_W_C = T_W_C_guess;
@@ -206,14 +206,14 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
   if (depth.countMeasurements() == 0) return fail(TrackStatus::kBadInput, "depth image holds no valid measurement");
   if (!T_W_C_guess.matrix().allFinite()) return fail(TrackStatus::kBadInput, "pose guess is not finite");
 
-  const float huber_k = static_cast<float>(config_.huber_coefficient * volume.positiveTruncation());
+  const float huber_k = static_cast<float>(config_.huber_coefficient * map.positiveTruncation());
   Eigen::Isometry3d T_W_C = T_W_C_guess;
   NormalEquations last;
   for (const PyramidLevel& level : config_.levels) {
     const std::vector<Eigen::Vector3f> points_C = backProjectSubsampled(depth, camera, level.stride);
     int iterations = 0;
     for (int it = 1; it <= level.max_iterations; ++it) {
-      last = buildNormalEquations(points_C, volume, T_W_C, huber_k, config_.sensor_weights ? &config_.noise : nullptr,
+      last = buildNormalEquations(points_C, map, T_W_C, huber_k, config_.sensor_weights ? &config_.noise : nullptr,
                                   config_.normalize_by_gradient);
       if (last.count < config_.min_valid_points) {
         std::ostringstream msg;

@@ -10,7 +10,9 @@
 #include <omp.h>
 #endif
 
+#include "sdf_tracker/core/sparse_tsdf_map.h"
 #include "sdf_tracker/core/surface.h"
+#include "sdf_tracker/core/tsdf_volume.h"
 #include "sdf_tracker/ros/conversions.h"
 
 namespace sdf_tracker_ros {
@@ -24,25 +26,56 @@ constexpr int kBackgroundNice = 10;
 
 }  // namespace
 
-MapSnapshot::MapSnapshot(std::mutex& map_mutex, std::function<const st::TsdfVolume*()> live)
+MapSnapshot::MapSnapshot(std::mutex& map_mutex, std::function<const st::TsdfMap*()> live)
     : map_mutex_(map_mutex), live_(std::move(live)) {}
 
-const st::TsdfVolume* MapSnapshot::update(int slabs_per_lock) {
+bool MapSnapshot::copyAllIfStale(const st::TsdfMap& live) {
+  const bool sparse = live.type() == st::MapType::kSparse;
+  const bool stale = !copy_ || !copy_->config().sameGrid(live.config()) ||
+                     (sparse && static_cast<const st::SparseTsdfMap&>(live).clearedAt() > synced_revision_);
+  if (!stale) return false;
+  copy_ = live.clone();
+  if (sparse) synced_revision_ = static_cast<const st::SparseTsdfMap&>(live).revision();
+  return true;
+}
+
+const st::TsdfMap* MapSnapshot::update(int slabs_per_lock, int blocks_per_lock) {
+  std::vector<st::SparseTsdfMap::BlockIndex> changed;
+  {
+    std::lock_guard<std::mutex> lock(map_mutex_);
+    const st::TsdfMap* live = live_();
+    if (!live) return nullptr;
+    if (copyAllIfStale(*live)) return copy_.get();
+    if (live->type() == st::MapType::kSparse) {
+      const auto& sparse = static_cast<const st::SparseTsdfMap&>(*live);
+      changed = sparse.changedSince(synced_revision_);
+      synced_revision_ = sparse.revision();
+    }
+  }
+  if (copy_->type() == st::MapType::kSparse) {
+    for (size_t first = 0; first < changed.size(); first += blocks_per_lock) {
+      const std::vector<st::SparseTsdfMap::BlockIndex> piece(
+          changed.begin() + first, changed.begin() + std::min(changed.size(), first + blocks_per_lock));
+      std::lock_guard<std::mutex> lock(map_mutex_);
+      const st::TsdfMap* live = live_();
+      if (!live || copyAllIfStale(*live)) return copy_.get();
+      static_cast<st::SparseTsdfMap&>(*copy_).copyBlocksFrom(static_cast<const st::SparseTsdfMap&>(*live), piece);
+    }
+    return copy_.get();
+  }
   for (int k = 0;; k += slabs_per_lock) {
     std::lock_guard<std::mutex> lock(map_mutex_);
-    const st::TsdfVolume* live = live_();
+    const st::TsdfMap* live = live_();
     if (!live) return nullptr;
-    if (!copy_ || !copy_->config().sameGrid(live->config())) {  // first use, or a map of another grid was loaded
-      copy_ = std::make_unique<st::TsdfVolume>(*live);
-      return copy_.get();
-    }
-    if (k >= live->dims().z()) return copy_.get();
-    copy_->copySlabsFrom(*live, k, k + slabs_per_lock);
+    if (copyAllIfStale(*live)) return copy_.get();
+    const auto& dense = static_cast<const st::TsdfVolume&>(*live);
+    if (k >= dense.dims().z()) return copy_.get();
+    static_cast<st::TsdfVolume&>(*copy_).copySlabsFrom(dense, k, k + slabs_per_lock);
   }
 }
 
 MapPublisher::MapPublisher(ros::NodeHandle pnh, std::mutex& map_mutex,
-                           std::function<const st::TsdfVolume*()> live, std::function<Eigen::Isometry3d()> T_map_W,
+                           std::function<const st::TsdfMap*()> live, std::function<Eigen::Isometry3d()> T_map_W,
                            std::function<ros::Time()> stamp, std::string map_frame, double cloud_rate_hz,
                            double mesh_rate_hz)
     : snapshot_(map_mutex, std::move(live)),
@@ -88,7 +121,7 @@ void MapPublisher::run() {
     if (now >= next_cloud) next_cloud = now + periodOf(cloud_period_s_);
     if (now >= next_mesh) next_mesh = now + periodOf(mesh_period_s_);
     if (!cloud_due && !mesh_due) continue;
-    const st::TsdfVolume* map = snapshot_.update();
+    const st::TsdfMap* map = snapshot_.update();
     if (!map) continue;
     std_msgs::Header header;
     header.stamp = stamp_();

@@ -1,5 +1,6 @@
 #include "sdf_tracker/ros/map_services.h"
 
+#include "sdf_tracker/core/sparse_tsdf_map.h"
 #include "sdf_tracker/core/surface.h"
 
 namespace sdf_tracker_ros {
@@ -25,10 +26,10 @@ std::string MapServices::outputPath(const std::string& requested, const std::str
   return requested.empty() ? options_.output_directory + "/" + default_name : requested;
 }
 
-st::TsdfVolume MapServices::copyMap(std::vector<st::io::StampedPose>* trajectory) {
+std::unique_ptr<st::TsdfMap> MapServices::copyMap(std::vector<st::io::StampedPose>* trajectory) {
   std::lock_guard<std::mutex> lock(state_.mutex);
   if (trajectory) *trajectory = state_.trajectory;
-  return state_.pipeline->volume();
+  return state_.pipeline->map().clone();
 }
 
 void MapServices::writeTrajectory(const std::vector<st::io::StampedPose>& trajectory) const {
@@ -39,7 +40,7 @@ void MapServices::writeTrajectory(const std::vector<st::io::StampedPose>& trajec
 
 void MapServices::writeAtShutdown() {
   std::vector<st::io::StampedPose> trajectory;
-  const st::TsdfVolume map = copyMap(&trajectory);
+  const std::unique_ptr<st::TsdfMap> map = copyMap(&trajectory);
   auto attempt = [](const char* what, const std::function<void()>& write) {
     try {
       write();
@@ -49,13 +50,15 @@ void MapServices::writeAtShutdown() {
   };
   attempt("trajectory", [&] { writeTrajectory(trajectory); });
   const bool need_mesh = !options_.mesh_file.empty() || options_.output_triangles;
-  const st::TriangleMesh mesh = need_mesh ? st::extractMesh(map) : st::TriangleMesh();
+  const st::TriangleMesh mesh = need_mesh ? st::extractMesh(*map) : st::TriangleMesh();
   if (!options_.mesh_file.empty()) attempt("mesh", [&] { st::io::writePly(options_.mesh_file, mesh); });
   if (!options_.cloud_file.empty()) {
-    attempt("cloud", [&] { st::io::writePly(options_.cloud_file, st::extractSurfaceCloud(map)); });
+    attempt("cloud", [&] { st::io::writePly(options_.cloud_file, st::extractSurfaceCloud(*map)); });
   }
   if (options_.output_triangles) attempt("triangles", [&] { st::io::writeObj(outputPath("", "triangles.obj"), mesh); });
-  if (options_.output_volume) attempt("volume", [&] { st::io::writeVti(outputPath("", "sdf_volume.vti"), map); });
+  if (options_.output_volume) {
+    attempt("volume", [&] { st::io::writeVti(outputPath("", "sdf_volume.vti"), st::toDenseVolume(*map)); });
+  }
 }
 
 bool MapServices::answer(sdf_tracker::SavePath::Response& res, const std::function<std::string()>& action) {
@@ -82,7 +85,7 @@ bool MapServices::saveMesh(sdf_tracker::SavePath::Request& req, sdf_tracker::Sav
   return answer(res, [&] {
     const std::string path = outputPath(req.path, "mesh.ply");
     std::vector<st::io::StampedPose> trajectory;
-    const st::TriangleMesh mesh = st::extractMesh(copyMap(&trajectory));
+    const st::TriangleMesh mesh = st::extractMesh(*copyMap(&trajectory));
     const bool obj = path.size() > 4 && path.compare(path.size() - 4, 4, ".obj") == 0;
     obj ? st::io::writeObj(path, mesh) : st::io::writePly(path, mesh);
     writeTrajectory(trajectory);
@@ -94,7 +97,7 @@ bool MapServices::saveVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
   return answer(res, [&] {
     const std::string path = outputPath(req.path, "sdf_volume.vti");
     std::vector<st::io::StampedPose> trajectory;
-    st::io::writeVti(path, copyMap(&trajectory));
+    st::io::writeVti(path, st::toDenseVolume(*copyMap(&trajectory)));
     writeTrajectory(trajectory);
     return "wrote the volume to " + path;
   });
@@ -110,7 +113,7 @@ bool MapServices::loadVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
     }
     st::TsdfVolume loaded = st::io::readVti(path, compact);  // read before taking the lock
     std::lock_guard<std::mutex> lock(state_.mutex);
-    state_.pipeline->setVolume(std::move(loaded));
+    state_.pipeline->setMap(std::make_unique<st::TsdfVolume>(std::move(loaded)));
     state_.trajectory.clear();
     state_.restarted = true;
     return "tracking against " + path;

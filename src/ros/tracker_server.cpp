@@ -42,7 +42,8 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
   camera_settings_ = settings.camera;
   state_.pipeline = std::make_unique<st::SdfPipeline>(settings.pipeline);
   if (options_.load_volume != "none" && !options_.load_volume.empty()) {
-    state_.pipeline->setVolume(st::io::readVti(options_.load_volume, settings.pipeline.volume.compact_voxels));
+    state_.pipeline->setMap(std::make_unique<st::TsdfVolume>(
+        st::io::readVti(options_.load_volume, settings.pipeline.volume.compact_voxels)));
     const auto& v = state_.pipeline->config().volume;
     ROS_INFO("sdf_tracker: tracking against the map in %s (its grid: %dx%dx%d of %g m)", options_.load_volume.c_str(),
              v.dims.x(), v.dims.y(), v.dims.z(), v.voxel_size_m);
@@ -54,7 +55,7 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
   services_ = std::make_unique<MapServices>(pnh_, state_, options_);
   const PoseBroadcaster* poses = poses_.get();
   map_publisher_ = std::make_unique<MapPublisher>(
-      pnh_, state_.mutex, [this]() -> const st::TsdfVolume* { return &state_.pipeline->volume(); },
+      pnh_, state_.mutex, [this]() -> const st::TsdfMap* { return &state_.pipeline->map(); },
       [poses] { return poses->T_map_W(); },
       [this] {
         std::lock_guard<std::mutex> lock(state_.mutex);
@@ -97,9 +98,9 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
 
   const auto& v = settings.pipeline.volume;
   const auto& f = options_.frames;
-  ROS_INFO("sdf_tracker: listening on %s (intrinsics from %s); grid %dx%dx%d of %g m; tf %s%s%s -> %s",
-           depth_topic_.c_str(), options_.intrinsics_from_parameters ? "parameters" : info_topic_.c_str(), v.dims.x(),
-           v.dims.y(), v.dims.z(), v.voxel_size_m, f.map_frame.c_str(), f.odom_frame.empty() ? "" : " -> ",
+  ROS_INFO("sdf_tracker: listening on %s (intrinsics from %s); %s; tf %s%s%s -> %s", depth_topic_.c_str(),
+           options_.intrinsics_from_parameters ? "parameters" : info_topic_.c_str(), v.describe().c_str(),
+           f.map_frame.c_str(), f.odom_frame.empty() ? "" : " -> ",
            f.odom_frame.c_str(), f.base_frame.empty() ? (f.camera_frame.empty() ? "<image frame>" : f.camera_frame.c_str())
                                                       : f.base_frame.c_str());
 }
@@ -290,7 +291,7 @@ void TrackerServer::process(const Frame& frame) {
 
   if (denoised_pub_.getNumSubscribers() > 0) {
     std::lock_guard<std::mutex> lock(state_.mutex);
-    const st::RaycastImage cast = st::raycast(state_.pipeline->volume(), camera, T_W_C,
+    const st::RaycastImage cast = st::raycast(state_.pipeline->map(), camera, T_W_C,
                                               state_.pipeline->config().raycast, &depth);
     denoised_pub_.publish(toImageMsg(cast.depth, image.header));
   }

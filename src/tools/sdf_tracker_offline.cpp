@@ -169,14 +169,14 @@ int run(int argc, char** argv) {
   std::cout << camera.distortion.summary(sequence.distortionSource()) << "\n";
   st::SdfPipeline pipeline(settings.pipeline);
   if (args.has("load-volume")) {
-    pipeline.setVolume(st::io::readVti(args.get("load-volume"), settings.pipeline.volume.compact_voxels));
+    pipeline.setMap(std::make_unique<st::TsdfVolume>(
+        st::io::readVti(args.get("load-volume"), settings.pipeline.volume.compact_voxels)));
     // The file's grid replaces the configured one: the rules between parameters must hold for it.
     st::throwIfInvalid("parameters with the grid of " + args.get("load-volume"),
                        st::Settings{pipeline.config(), settings.camera}.validate());
   }
   const auto& v = pipeline.config().volume;
-  std::cout << "preset " << args.get("preset", "default") << ": grid " << v.dims.x() << "x" << v.dims.y() << "x"
-            << v.dims.z() << " of " << v.voxel_size_m << " m"
+  std::cout << "preset " << args.get("preset", "default") << ": " << v.describe()
             << (args.has("load-volume") ? " (from " + args.get("load-volume") + ")" : std::string()) << ", truncation "
             << v.positive_truncation_m << " / " << pipeline.config().integrator.negative_truncation_m
             << " m, schedule " << st::formatSchedule(pipeline.config().tracker.levels) << "\n";
@@ -199,7 +199,7 @@ int run(int argc, char** argv) {
     double cast_ms = 0.0;
     if (args.has("raycast")) {
       const auto cast_start = std::chrono::steady_clock::now();
-      st::raycast(pipeline.volume(), camera, pipeline.pose(), settings.pipeline.raycast, &depth);
+      st::raycast(pipeline.map(), camera, pipeline.pose(), settings.pipeline.raycast, &depth);
       cast_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - cast_start).count();
       raycast_ms.push_back(cast_ms);
     }
@@ -222,11 +222,11 @@ int run(int argc, char** argv) {
 
   st::io::writeTrajectory(output.path("trajectory.txt"), trajectory);
   st::io::writeTextFile(output.path("frames.csv"), frames_csv.str());
-  const st::TriangleMesh mesh = st::extractMesh(pipeline.volume());
+  const st::TriangleMesh mesh = st::extractMesh(pipeline.map());
   st::io::writePly(output.path("mesh.ply"), mesh);
-  st::io::writePly(output.path("cloud.ply"), st::extractSurfaceCloud(pipeline.volume()));
+  st::io::writePly(output.path("cloud.ply"), st::extractSurfaceCloud(pipeline.map()));
   if (args.has("save-volume")) {
-    st::io::writeVti(output.path("sdf_volume.vti"), pipeline.volume());
+    st::io::writeVti(output.path("sdf_volume.vti"), st::toDenseVolume(pipeline.map()));
     st::io::writeObj(output.path("triangles.obj"), mesh);
   }
 
@@ -245,7 +245,7 @@ int run(int argc, char** argv) {
           << percentile(frame_ms, 0.5) << ", p95 " << percentile(frame_ms, 0.95) << "; tracking median "
           << percentile(tracking_ms, 0.5) << ", fusion median " << percentile(fusion_ms, 0.5);
   if (!raycast_ms.empty()) summary << ", ray casting median " << percentile(raycast_ms, 0.5);
-  summary << "\nmemory: grid " << pipeline.volume().memoryBytes() / 1048576.0 << " MiB, peak resident " << peak_rss_mb
+  summary << "\nmemory: " << st::toString(v.type) << " map " << pipeline.map().memoryBytes() / 1048576.0 << " MiB, peak resident " << peak_rss_mb
           << " MiB\n";
 
   // The same figures for scripts (bench/), as JSON.
@@ -255,8 +255,9 @@ int run(int argc, char** argv) {
   json << "{\n  \"sequence\": " << jsonString(sequence_dir) << ",\n  \"preset\": "
        << jsonString(args.get("preset", "default")) << ",\n  \"frames\": " << sequence.size()
        << ",\n  \"failed_frames\": " << failed << ",\n  \"degenerate_frames\": " << degenerate
-       << ",\n  \"grid\": [" << v.dims.x() << ", " << v.dims.y() << ", " << v.dims.z()
-       << "],\n  \"voxel_count\": " << pipeline.volume().voxelCount()
+       << ",\n  \"map_type\": " << jsonString(st::toString(v.type));
+  if (v.type == st::MapType::kDense) json << ",\n  \"grid\": [" << v.dims.x() << ", " << v.dims.y() << ", " << v.dims.z() << "]";
+  json << ",\n  \"voxel_count\": " << pipeline.map().voxelCount()
        << ",\n  \"voxel_size_m\": " << jsonNumber(v.voxel_size_m)
        << ",\n  \"compact_voxels\": " << (v.compact_voxels ? "true" : "false")
 #ifdef _OPENMP
@@ -270,7 +271,7 @@ int run(int argc, char** argv) {
          << ", \"" << stages[i].first << "_p95\": " << jsonNumber(percentile(*stages[i].second, 0.95));
   }
   json << "},\n  \"peak_rss_mb\": " << jsonNumber(peak_rss_mb)
-       << ",\n  \"grid_mb\": " << jsonNumber(pipeline.volume().memoryBytes() / 1048576.0)
+       << ",\n  \"grid_mb\": " << jsonNumber(pipeline.map().memoryBytes() / 1048576.0)
        << ",\n  \"elapsed_s\": " << jsonNumber(elapsed_s);
   if (!sequence.groundTruth().empty()) {
     try {

@@ -10,6 +10,7 @@
 #include "sdf_tracker/core/camera.h"
 #include "sdf_tracker/core/integrator.h"
 #include "sdf_tracker/core/synthetic.h"
+#include "sdf_tracker/core/sparse_tsdf_map.h"
 #include "sdf_tracker/core/tsdf_volume.h"
 
 namespace sdf_tracker::test {
@@ -41,6 +42,20 @@ inline Eigen::Isometry3d perturbed(const Eigen::Isometry3d& T, double translatio
   delta.linear() = Eigen::AngleAxisd(rotation_rad, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   delta.translation() = translation_m * Eigen::Vector3d(2, -1, 1).normalized();
   return T * delta;
+}
+
+/// The sum of every voxel's weight: changes whenever anything is fused.
+inline double totalWeight(const TsdfMap& map) {
+  double sum = 0.0;
+  if (map.type() == MapType::kSparse) {
+    static_cast<const SparseTsdfMap&>(map).forEachBlock([&sum](const SparseTsdfMap::BlockIndex&, const VoxelBlock& block) {
+      for (const Voxel& v : block.voxels) sum += v.weight;
+    });
+  } else {
+    const auto& volume = static_cast<const TsdfVolume&>(map);
+    for (size_t i = 0; i < volume.voxelCount(); ++i) sum += volume.voxel(i).weight;
+  }
+  return sum;
 }
 
 /// A fresh, unique scratch directory under the system temp folder.

@@ -25,7 +25,7 @@ TEST(Pipeline, BadFramesLeaveMapAndPoseUntouched) {
   EXPECT_FALSE(empty.fused);
   const FrameReport too_near = pipeline.processFrame(DepthImage(camera.width, camera.height, 0.2f), camera);
   EXPECT_EQ(too_near.track.status, TrackStatus::kBadInput) << "depth under MinDepth is no measurement";
-  for (size_t i = 0; i < pipeline.volume().voxelCount(); ++i) ASSERT_EQ(pipeline.volume().voxel(i).weight, 0.0f);
+  EXPECT_EQ(test::totalWeight(pipeline.map()), 0.0) << "nothing fused";
   EXPECT_TRUE(pipeline.pose().isApprox(Eigen::Isometry3d::Identity()));
 }
 
@@ -57,13 +57,6 @@ PipelineConfig smallRoomPipeline() {
   return config;
 }
 
-/// The sum of every voxel's weight: changes whenever anything is fused.
-double totalWeight(const TsdfVolume& volume) {
-  double sum = 0.0;
-  for (size_t i = 0; i < volume.voxelCount(); ++i) sum += volume.voxel(i).weight;
-  return sum;
-}
-
 constexpr double kFramePeriod_s = 1.0 / 30.0;
 constexpr double kDeskDuration_s = 10.0;
 
@@ -78,7 +71,7 @@ TEST(Pipeline, ALostCameraHoldsItsPoseFusesNothingAndRelocalisesWhenItSeesTheMap
   int i = 0;
   for (; i < 10; ++i) ASSERT_TRUE(pipeline.processFrame(frameAt(i), camera, i * kFramePeriod_s).track.ok()) << i;
   const Eigen::Isometry3d held = pipeline.pose();
-  const double weight_before = totalWeight(pipeline.volume());
+  const double weight_before = test::totalWeight(pipeline.map());
 
   // The camera is carried far away (half a metre, 70 degrees): no frame may be tracked or fused.
   const Eigen::Isometry3d away = test::perturbed(synthetic::cameraPose(synthetic::Motion::kDesk, i * kFramePeriod_s,
@@ -89,7 +82,7 @@ TEST(Pipeline, ALostCameraHoldsItsPoseFusesNothingAndRelocalisesWhenItSeesTheMap
     EXPECT_FALSE(report.fused);
   }
   EXPECT_EQ(pipeline.consecutiveFailures(), 15);
-  EXPECT_EQ(totalWeight(pipeline.volume()), weight_before) << "nothing fused while lost";
+  EXPECT_EQ(test::totalWeight(pipeline.map()), weight_before) << "nothing fused while lost";
   EXPECT_TRUE(pipeline.pose().isApprox(held, 1e-9)) << "the pose is held";
 
   // Back near where it was lost: tracking resumes by itself, at the right pose.

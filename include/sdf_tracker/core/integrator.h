@@ -8,7 +8,7 @@
 #include "sdf_tracker/core/camera.h"
 #include "sdf_tracker/core/depth_image.h"
 #include "sdf_tracker/core/sensor_model.h"
-#include "sdf_tracker/core/tsdf_volume.h"
+#include "sdf_tracker/core/tsdf_map.h"
 
 namespace sdf_tracker {
 
@@ -29,8 +29,9 @@ struct IntegratorConfig {
   std::vector<std::string> validate() const;
 };
 
-/// Projective fusion of depth images into a TsdfVolume, parallel over voxels (each voxel is
-/// written by exactly one thread).
+/// Projective fusion of depth images into a map, parallel over voxels (each voxel is written by
+/// exactly one thread). The dense grid is swept row by row within the viewing frustum; the sparse
+/// map first adds the blocks the truncation band reaches, then fuses every block in the frustum.
 class Integrator {
  public:
   /// Throws std::invalid_argument naming every violation of the config.
@@ -38,11 +39,11 @@ class Integrator {
 
   const IntegratorConfig& config() const { return config_; }
 
-  /// Fuses `depth` seen by `camera` from pose T_W_C (camera to world) into `volume`.
+  /// Fuses `depth` seen by `camera` from pose T_W_C (camera to world) into `map`.
   /// The depth image must match the camera's size (std::invalid_argument otherwise).
   /// Returns the number of voxels updated.
   size_t integrate(const DepthImage& depth, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C,
-                   TsdfVolume* volume) const;
+                   TsdfMap* map) const;
 
  private:
   IntegratorConfig config_;

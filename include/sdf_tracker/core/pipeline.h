@@ -14,6 +14,7 @@
 #include "sdf_tracker/core/integrator.h"
 #include "sdf_tracker/core/raycaster.h"
 #include "sdf_tracker/core/tracker.h"
+#include "sdf_tracker/core/tsdf_map.h"
 #include "sdf_tracker/core/tsdf_volume.h"
 
 namespace sdf_tracker {
@@ -77,14 +78,16 @@ class SdfPipeline {
 
   /// Camera to world at the last accepted frame.
   const Eigen::Isometry3d& pose() const { return T_W_C_; }
-  const TsdfVolume& volume() const { return *volume_; }
+  /// The map (a TsdfVolume or a SparseTsdfMap, per config().volume.type).
+  const TsdfMap& map() const { return *map_; }
   /// Frames in a row that could not be tracked (0 while tracking works).
   int consecutiveFailures() const { return consecutive_failures_; }
 
   /// Clears the map and puts the camera back at the start pose.
   void reset();
-  /// Replaces the map (e.g. a loaded .vti); the next frame is tracked against it from the start pose.
-  void setVolume(TsdfVolume volume);
+  /// Replaces the map (e.g. a loaded .vti) with one of any type; the next frame is tracked against
+  /// it from the start pose.
+  void setMap(std::unique_ptr<TsdfMap> map);
 
   /// Live-changeable settings (dynamic reconfigure): everything but the grid geometry. Throws
   /// std::invalid_argument (leaving the pipeline unchanged) when the candidate is invalid or
@@ -102,7 +105,7 @@ class SdfPipeline {
   Eigen::Isometry3d predictPose(double timestamp_s) const;
 
   PipelineConfig config_;
-  std::unique_ptr<TsdfVolume> volume_;
+  std::unique_ptr<TsdfMap> map_;
   std::unique_ptr<Integrator> integrator_;
   std::unique_ptr<Tracker> tracker_;
   /// The pixel map of the last distorted camera seen (made again when the camera changes).

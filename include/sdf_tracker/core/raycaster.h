@@ -7,7 +7,7 @@
 
 #include "sdf_tracker/core/camera.h"
 #include "sdf_tracker/core/depth_image.h"
-#include "sdf_tracker/core/tsdf_volume.h"
+#include "sdf_tracker/core/tsdf_map.h"
 
 namespace sdf_tracker {
 
@@ -32,7 +32,7 @@ struct RaycastImage {
 /// "virtual sensor"). With a seed depth image, each ray starts at the measured depth and takes at
 /// most max_refinement_steps steps towards the zero crossing (the reference release's
 /// "image_denoised"); pixels without a measurement stay empty. Thread safe.
-RaycastImage raycast(const TsdfVolume& volume, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C,
+RaycastImage raycast(const TsdfMap& map, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C,
                      const RaycastConfig& config, const DepthImage* seed = nullptr);
 
 }  // namespace sdf_tracker

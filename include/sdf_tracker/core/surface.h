@@ -5,7 +5,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "sdf_tracker/core/tsdf_volume.h"
+#include "sdf_tracker/core/sparse_tsdf_map.h"
+#include "sdf_tracker/core/tsdf_map.h"
 
 namespace sdf_tracker {
 
@@ -23,11 +24,17 @@ struct TriangleMesh {
 };
 
 /// One point per lattice edge whose two observed samples change sign, linearly interpolated.
-/// Parallel over z slices; the order of the result is deterministic.
-SurfaceCloud extractSurfaceCloud(const TsdfVolume& volume);
+/// Parallel (over z slices of a dense grid, over blocks of a sparse map); the order of the result
+/// is deterministic.
+SurfaceCloud extractSurfaceCloud(const TsdfMap& map);
 
 /// Marching tetrahedra (six per cell, sharing the cell's main diagonal, as the reference
-/// release) over cells whose eight samples are all observed. Vertices on shared edges are welded.
-TriangleMesh extractMesh(const TsdfVolume& volume);
+/// release) over cells whose eight samples are all observed. Vertices on shared edges are welded
+/// (within a block, for a sparse map: blocks are meshed apart, so a block can be re-meshed alone).
+TriangleMesh extractMesh(const TsdfMap& map);
+
+/// A sparse map's mesh in the cells whose lowest corner lies in `block` (empty when the block does
+/// not exist): the pieces extractMesh joins.
+TriangleMesh extractBlockMesh(const SparseTsdfMap& map, const SparseTsdfMap::BlockIndex& block);
 
 }  // namespace sdf_tracker

@@ -8,7 +8,7 @@
 #include "sdf_tracker/core/camera.h"
 #include "sdf_tracker/core/depth_image.h"
 #include "sdf_tracker/core/sensor_model.h"
-#include "sdf_tracker/core/tsdf_volume.h"
+#include "sdf_tracker/core/tsdf_map.h"
 
 namespace sdf_tracker {
 
@@ -101,7 +101,7 @@ class Tracker {
 
   const TrackerConfig& config() const { return config_; }
 
-  TrackResult track(const DepthImage& depth, const PinholeCamera& camera, const TsdfVolume& volume,
+  TrackResult track(const DepthImage& depth, const PinholeCamera& camera, const TsdfMap& map,
                     const Eigen::Isometry3d& T_W_C_guess) const;
 
  private:

@@ -9,14 +9,9 @@
 
 #include <Eigen/Core>
 
-namespace sdf_tracker {
+#include "sdf_tracker/core/tsdf_map.h"
 
-/// One lattice sample of the field: truncated signed distance [m] and the accumulated weight.
-/// weight == 0 means "never observed"; its distance then holds the positive truncation.
-struct Voxel {
-  float distance_m;
-  float weight;
-};
+namespace sdf_tracker {
 
 /// The optional 4-byte voxel: distance as a fraction of +-2 Dmax in 16 bits (6 um steps for
 /// Dmax = 0.1 m) and weight in 1/256 steps up to 255.99.
@@ -52,52 +47,24 @@ struct VoxelCodec<CompactVoxel> {
   float to_units;
 };
 
-/// Geometry of the dense grid. The lattice is axis-aligned in the world frame W: sample (i, j, k)
-/// sits at origin_W + voxel_size_m * (i, j, k).
-struct VolumeConfig {
-  Eigen::Vector3i dims = Eigen::Vector3i(256, 256, 256);
-  double voxel_size_m = 0.01;
-  Eigen::Vector3d origin_W = Eigen::Vector3d::Zero();
-  /// Dmax: distances are clamped to at most this; unseen voxels hold it.
-  double positive_truncation_m = 0.1;
-  /// Store CompactVoxel (4 bytes) instead of Voxel (8 bytes): half the memory, distances
-  /// quantised to 2 Dmax / 32767 and weights to 1/256 (so MaxWeight must stay below 256).
-  bool compact_voxels = false;
-
-  std::vector<std::string> validate() const;
-  Eigen::Vector3d extent_m() const { return dims.cast<double>() * voxel_size_m; }
-  /// Same lattice and storage (dims, voxel size, positive truncation, voxel format), wherever placed.
-  bool sameLattice(const VolumeConfig& other) const {
-    return dims == other.dims && voxel_size_m == other.voxel_size_m &&
-           positive_truncation_m == other.positive_truncation_m && compact_voxels == other.compact_voxels;
-  }
-  /// The same lattice at the same place: voxel i of one is voxel i of the other.
-  bool sameGrid(const VolumeConfig& other) const { return sameLattice(other) && origin_W == other.origin_W; }
-};
-
-/// Result of sampling the field at a continuous point.
-struct FieldSample {
-  float distance_m;
-  Eigen::Vector3f gradient;  ///< d(distance)/d(position), per metre of world.
-};
-
 /// A dense TSDF on one flat buffer (x fastest, then y, then z) of Voxel or CompactVoxel. Not thread
 /// safe for concurrent writes to the same voxel; concurrent reads are safe.
-class TsdfVolume {
+class TsdfVolume : public TsdfMap {
  public:
-  /// Throws std::invalid_argument naming every violation of the config.
+  /// Throws std::invalid_argument naming every violation of the config (of any type: a dense
+  /// grid of the config's geometry).
   explicit TsdfVolume(const VolumeConfig& config);
 
-  const VolumeConfig& config() const { return config_; }
   const Eigen::Vector3i& dims() const { return config_.dims; }
-  float voxelSize() const { return voxel_size_; }
-  float positiveTruncation() const { return positive_truncation_; }
-  size_t voxelCount() const { return voxel_count_; }
+  size_t voxelCount() const override { return voxel_count_; }
   bool compact() const { return config_.compact_voxels; }
-  size_t memoryBytes() const { return compact() ? compact_.size() * sizeof(CompactVoxel) : voxels_.size() * sizeof(Voxel); }
+  size_t memoryBytes() const override {
+    return compact() ? compact_.size() * sizeof(CompactVoxel) : voxels_.size() * sizeof(Voxel);
+  }
+  std::unique_ptr<TsdfMap> clone() const override { return std::make_unique<TsdfVolume>(*this); }
 
   /// Sets every voxel back to (Dmax, 0): nothing observed.
-  void clear();
+  void clear() override;
 
   /// Copies the z-slabs [k_begin, k_end) of `source`, which must have this volume's config
   /// (std::invalid_argument otherwise). Lets a reader take a snapshot of a live map in short
@@ -130,18 +97,9 @@ class TsdfVolume {
                      : fn(static_cast<const Voxel*>(voxels_.data()), VoxelCodec<Voxel>(positive_truncation_));
   }
 
-  /// World position of lattice sample (i, j, k).
-  Eigen::Vector3f position(int i, int j, int k) const {
-    return origin_ + voxel_size_ * Eigen::Vector3f(i, j, k);
-  }
-  /// Continuous lattice coordinates of a world point.
-  Eigen::Vector3f toLattice(const Eigen::Vector3f& p_W) const { return (p_W - origin_) * inv_voxel_size_; }
-
-  /// Trilinear value and its analytic gradient at p_W. Returns false when p_W is outside the
-  /// lattice or any of the 8 surrounding samples is unobserved. Thread safe.
-  bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const;
-  /// Trilinear value only; same validity rule as sample().
-  bool sampleDistance(const Eigen::Vector3f& p_W, float* distance_m) const;
+  /// Trilinear value and its analytic gradient at p_W; false outside the grid or next to an
+  /// unobserved sample. Thread safe.
+  bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override;
 
  private:
   /// Finds the cell of p_W and its fractional position; false outside the lattice.
@@ -150,11 +108,6 @@ class TsdfVolume {
   bool sampleFrom(const Stored* voxels, const VoxelCodec<Stored>& codec, const Eigen::Vector3f& p_W,
                   FieldSample* out) const;
 
-  VolumeConfig config_;
-  float voxel_size_;
-  float inv_voxel_size_;
-  float positive_truncation_;
-  Eigen::Vector3f origin_;
   size_t stride_y_;
   size_t stride_z_;
   size_t voxel_count_;

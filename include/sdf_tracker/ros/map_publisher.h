@@ -10,7 +10,7 @@
 #include <Eigen/Geometry>
 #include <ros/ros.h>
 
-#include "sdf_tracker/core/tsdf_volume.h"
+#include "sdf_tracker/core/tsdf_map.h"
 
 namespace sdf_tracker_ros {
 
@@ -18,17 +18,23 @@ namespace sdf_tracker_ros {
 class MapSnapshot {
  public:
   /// `live` is read only while `map_mutex` is held; `live()` may return nullptr (no map yet).
-  MapSnapshot(std::mutex& map_mutex, std::function<const sdf_tracker::TsdfVolume*()> live);
+  MapSnapshot(std::mutex& map_mutex, std::function<const sdf_tracker::TsdfMap*()> live);
 
-  /// Brings the copy up to date: slab groups of `slabs_per_lock` z-slices each under the lock.
-  /// Slab groups may come from consecutive frames (as a screen refresh would); each voxel is
-  /// consistent. Returns the copy, or nullptr when there is no map.
-  const sdf_tracker::TsdfVolume* update(int slabs_per_lock = 8);
+  /// Brings the copy up to date in pieces, each under the lock: a dense grid in groups of
+  /// `slabs_per_lock` z-slices, a sparse map in groups of `blocks_per_lock` of the blocks changed
+  /// since the last update. Pieces may come from consecutive frames (as a screen refresh would);
+  /// each voxel is consistent. Returns the copy, or nullptr when there is no map.
+  const sdf_tracker::TsdfMap* update(int slabs_per_lock = 8, int blocks_per_lock = 256);
 
  private:
+  /// Copies the whole live map when there is no copy or it can no longer be brought up to date
+  /// (another grid was loaded, or the map was cleared since); true when it did.
+  bool copyAllIfStale(const sdf_tracker::TsdfMap& live);
+
   std::mutex& map_mutex_;
-  std::function<const sdf_tracker::TsdfVolume*()> live_;
-  std::unique_ptr<sdf_tracker::TsdfVolume> copy_;
+  std::function<const sdf_tracker::TsdfMap*()> live_;
+  std::unique_ptr<sdf_tracker::TsdfMap> copy_;
+  uint64_t synced_revision_ = 0;  ///< sparse: the live map's revision the copy holds
 };
 
 /// Publishes the map as ~cloud and ~mesh from a snapshot on its own low-priority thread, each at
@@ -37,7 +43,7 @@ class MapSnapshot {
 class MapPublisher {
  public:
   /// `T_map_W` gives the map frame's pose in the tracker's world, `stamp` the latest frame's stamp.
-  MapPublisher(ros::NodeHandle pnh, std::mutex& map_mutex, std::function<const sdf_tracker::TsdfVolume*()> live,
+  MapPublisher(ros::NodeHandle pnh, std::mutex& map_mutex, std::function<const sdf_tracker::TsdfMap*()> live,
                std::function<Eigen::Isometry3d()> T_map_W, std::function<ros::Time()> stamp, std::string map_frame,
                double cloud_rate_hz, double mesh_rate_hz);
   ~MapPublisher();

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <memory>
 #include <string>
 
 #include <ros/ros.h>
@@ -29,7 +30,7 @@ class MapServices {
   /// Runs a service's action; its text (or the exception's) becomes the response's message.
   static bool answer(sdf_tracker::SavePath::Response& res, const std::function<std::string()>& action);
   /// A copy of the map and the trajectory so far, taken under the lock.
-  sdf_tracker::TsdfVolume copyMap(std::vector<sdf_tracker::io::StampedPose>* trajectory);
+  std::unique_ptr<sdf_tracker::TsdfMap> copyMap(std::vector<sdf_tracker::io::StampedPose>* trajectory);
   void writeTrajectory(const std::vector<sdf_tracker::io::StampedPose>& trajectory) const;
   std::string outputPath(const std::string& requested, const std::string& default_name) const;
 

@@ -1,0 +1,145 @@
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "sdf_tracker/core/tsdf_map.h"
+#include "sdf_tracker/core/tsdf_volume.h"
+
+namespace sdf_tracker {
+
+/// Voxels along each edge of a block.
+constexpr int kBlockSide = 8;
+constexpr int kBlockVoxels = kBlockSide * kBlockSide * kBlockSide;
+
+/// A cube of kBlockSide^3 voxels, x fastest, then y, then z.
+struct VoxelBlock {
+  std::array<Voxel, kBlockVoxels> voxels;
+  /// The map's revision when a voxel of this block last changed (see SparseTsdfMap::revision()).
+  uint64_t changed_at = 0;
+
+  static int index(int x, int y, int z) { return (z * kBlockSide + y) * kBlockSide + x; }
+  static int index(const Eigen::Vector3i& local) { return index(local.x(), local.y(), local.z()); }
+};
+
+/// A TSDF stored in voxel blocks that exist only where a measurement's truncation band reached:
+/// memory grows with the observed surface, not with the extent. Block b holds the voxels
+/// kBlockSide * b + [0, kBlockSide)^3 of the lattice; voxels of blocks that do not exist are
+/// unobserved. Blocks are added and changed by one writer; concurrent reads are safe while
+/// nothing writes.
+class SparseTsdfMap : public TsdfMap {
+ public:
+  using BlockIndex = Eigen::Vector3i;
+
+  /// Throws std::invalid_argument naming every violation of the config (whose type it sets to
+  /// sparse; dims are not read).
+  explicit SparseTsdfMap(const VolumeConfig& config);
+  SparseTsdfMap(const SparseTsdfMap& other);
+  SparseTsdfMap& operator=(const SparseTsdfMap& other);
+  SparseTsdfMap(SparseTsdfMap&&) = default;
+  SparseTsdfMap& operator=(SparseTsdfMap&&) = default;
+
+  /// The block holding a lattice voxel, and the voxel's place in it.
+  static BlockIndex blockOf(const Eigen::Vector3i& voxel) {
+    return {voxel.x() >> kBlockShift, voxel.y() >> kBlockShift, voxel.z() >> kBlockShift};
+  }
+  static Eigen::Vector3i localOf(const Eigen::Vector3i& voxel) {
+    return {voxel.x() & kLocalMask, voxel.y() & kLocalMask, voxel.z() & kLocalMask};
+  }
+  /// The lattice voxel at a block's local (0, 0, 0).
+  static Eigen::Vector3i firstVoxel(const BlockIndex& block) { return block * kBlockSide; }
+  /// A block index packed into 64 bits (21 bits per axis: +-2^20 blocks, 167 km at 2 cm voxels),
+  /// and back; keys sort in the order blockIndices() lists. Indices beyond that reach wrap.
+  static uint64_t keyOf(const BlockIndex& block) {
+    constexpr uint64_t mask = (1ull << kKeyBits) - 1;
+    return (static_cast<uint64_t>(block.x() + kMaxBlock + 1) & mask) |
+           ((static_cast<uint64_t>(block.y() + kMaxBlock + 1) & mask) << kKeyBits) |
+           ((static_cast<uint64_t>(block.z() + kMaxBlock + 1) & mask) << (2 * kKeyBits));
+  }
+  static BlockIndex indexOf(uint64_t key) {
+    constexpr uint64_t mask = (1ull << kKeyBits) - 1;
+    return {static_cast<int>(key & mask) - kMaxBlock - 1, static_cast<int>((key >> kKeyBits) & mask) - kMaxBlock - 1,
+            static_cast<int>((key >> (2 * kKeyBits)) & mask) - kMaxBlock - 1};
+  }
+  /// Whether continuous lattice coordinates lie within the blocks' reach (false for NaN).
+  static bool withinReach(const Eigen::Vector3f& lattice) {
+    // Written so that NaN fails the comparison.
+    return lattice.cwiseAbs().maxCoeff() < static_cast<float>(kMaxBlock) * kBlockSide;
+  }
+  /// Block edge length [m].
+  float blockSize() const { return kBlockSide * voxelSize(); }
+
+  const VoxelBlock* find(const BlockIndex& block) const;
+  VoxelBlock* find(const BlockIndex& block);
+  /// The block, added with every voxel unobserved if it did not exist.
+  VoxelBlock& allocate(const BlockIndex& block);
+  /// Drops the block (its voxels become unobserved); nothing when it does not exist.
+  void remove(const BlockIndex& block);
+  size_t blockCount() const { return blocks_.size(); }
+  /// Calls fn(index, block) for every block, in no particular order.
+  template <typename Fn>
+  void forEachBlock(Fn&& fn) {
+    for (auto& [key, block] : blocks_) fn(indexOf(key), *block);
+  }
+  template <typename Fn>
+  void forEachBlock(Fn&& fn) const {
+    for (const auto& [key, block] : blocks_) fn(indexOf(key), static_cast<const VoxelBlock&>(*block));
+  }
+  /// Every block's index, in a fixed (sorted) order.
+  std::vector<BlockIndex> blockIndices() const;
+  /// A lattice voxel; unobserved (Dmax, 0) where no block holds it. Not for hot loops.
+  Voxel voxel(const Eigen::Vector3i& voxel) const;
+
+  /// The smallest box of lattice voxels [first, first + dims) that holds every block; dims is zero
+  /// when there is no block.
+  void bounds(Eigen::Vector3i* first, Eigen::Vector3i* dims) const;
+  /// The voxels [first, first + dims) as a dense grid at their place (unobserved where no block
+  /// holds them), e.g. to export a region to ParaView. Throws std::invalid_argument when the grid
+  /// would be too large (VolumeConfig::validate).
+  TsdfVolume toDense(const Eigen::Vector3i& first, const Eigen::Vector3i& dims) const;
+
+  /// Counts changes: each fusion raises it once and stamps the blocks it changed with it, so a
+  /// reader can tell which blocks changed since it last looked.
+  uint64_t revision() const { return revision_; }
+  uint64_t beginRevision() { return ++revision_; }
+  /// The revision of the last clear(): a copy synchronised before it must start afresh.
+  uint64_t clearedAt() const { return cleared_at_; }
+  /// Blocks that changed after `revision`, in a fixed (sorted) order.
+  std::vector<BlockIndex> changedSince(uint64_t revision) const;
+  /// Makes these blocks equal to `source`'s, removing those `source` no longer holds: lets a
+  /// reader keep a copy of a live map up to date in short pieces (see changedSince()).
+  void copyBlocksFrom(const SparseTsdfMap& source, const std::vector<BlockIndex>& blocks);
+
+  bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override;
+  void clear() override;
+  size_t voxelCount() const override { return blocks_.size() * kBlockVoxels; }
+  size_t memoryBytes() const override;
+  std::unique_ptr<TsdfMap> clone() const override { return std::make_unique<SparseTsdfMap>(*this); }
+
+ private:
+  static constexpr int kKeyBits = 21;
+  static constexpr int kMaxBlock = (1 << (kKeyBits - 1)) - 1;  ///< block indices lie in [-kMaxBlock, kMaxBlock]
+  static constexpr int kBlockShift = 3;
+  static constexpr int kLocalMask = kBlockSide - 1;
+  static_assert(kBlockSide == 1 << kBlockShift, "kBlockSide must be 2^kBlockShift");
+  static bool inKeyRange(const BlockIndex& block);
+
+  struct KeyHash {
+    size_t operator()(uint64_t key) const { return static_cast<size_t>((key ^ (key >> 29)) * 0x9E3779B97F4A7C15ull >> 16); }
+  };
+
+  std::unordered_map<uint64_t, std::unique_ptr<VoxelBlock>, KeyHash> blocks_;
+  uint64_t revision_ = 0;
+  uint64_t cleared_at_ = 0;
+};
+
+/// The map as a dense grid: a copy of a dense one; the box around every block of a sparse one.
+TsdfVolume toDenseVolume(const TsdfMap& map);
+
+}  // namespace sdf_tracker

@@ -1,0 +1,227 @@
+// The sparse block map: addressing, sampling across block borders, fusion and surfaces equal to
+// the dense grid's where both observe, live copies, and tracking that agrees with the dense grid.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "sdf_tracker/core/integrator.h"
+#include "sdf_tracker/core/parameters.h"
+#include "sdf_tracker/core/pipeline.h"
+#include "sdf_tracker/core/sparse_tsdf_map.h"
+#include "sdf_tracker/core/surface.h"
+#include "sdf_tracker/core/synthetic.h"
+#include "test_helpers.h"
+
+namespace sdf_tracker {
+namespace {
+
+using BlockIndex = SparseTsdfMap::BlockIndex;
+
+/// The room grid of the other tests as a sparse map on the same lattice.
+VolumeConfig sparseRoom() {
+  VolumeConfig config = test::roomVolume();
+  config.type = MapType::kSparse;
+  return config;
+}
+
+TEST(SparseMap, BlocksAndKeysAddressNegativeVoxelsToo) {
+  EXPECT_EQ(SparseTsdfMap::blockOf(Eigen::Vector3i(0, 7, 8)), BlockIndex(0, 0, 1));
+  EXPECT_EQ(SparseTsdfMap::blockOf(Eigen::Vector3i(-1, -8, -9)), BlockIndex(-1, -1, -2));
+  EXPECT_EQ(SparseTsdfMap::localOf(Eigen::Vector3i(-1, -8, -9)), Eigen::Vector3i(7, 0, 7));
+  for (const BlockIndex& b : {BlockIndex(0, 0, 0), BlockIndex(-1, 5, -300000), BlockIndex(1048575, -1048575, 7)}) {
+    EXPECT_EQ(SparseTsdfMap::indexOf(SparseTsdfMap::keyOf(b)), b);
+  }
+  EXPECT_LT(SparseTsdfMap::keyOf(BlockIndex(5, 0, 0)), SparseTsdfMap::keyOf(BlockIndex(0, 0, 1))) << "z sorts first";
+}
+
+TEST(SparseMap, HoldsOnlyTheBlocksItWasGivenAndFindsVoxelsThroughThem) {
+  SparseTsdfMap map(sparseRoom());
+  EXPECT_EQ(map.blockCount(), 0u);
+  EXPECT_EQ(map.voxel(Eigen::Vector3i(3, 3, 3)).weight, 0.0f);
+  VoxelBlock& block = map.allocate(BlockIndex(-1, 0, 2));
+  EXPECT_EQ(&map.allocate(BlockIndex(-1, 0, 2)), &block) << "allocating twice gives the same block";
+  block.voxels[VoxelBlock::index(7, 1, 2)] = Voxel{0.01f, 3.0f};
+  EXPECT_EQ(map.voxel(Eigen::Vector3i(-1, 1, 18)).weight, 3.0f);
+  EXPECT_EQ(map.voxelCount(), static_cast<size_t>(kBlockVoxels));
+  EXPECT_GE(map.memoryBytes(), sizeof(VoxelBlock));
+  map.remove(BlockIndex(-1, 0, 2));
+  EXPECT_EQ(map.find(BlockIndex(-1, 0, 2)), nullptr);
+  EXPECT_THROW(map.allocate(BlockIndex(1 << 20, 0, 0)), std::out_of_range);
+}
+
+TEST(SparseMap, SamplesExactlyAsTheDenseGridAcrossBlockBorders) {
+  // The same smooth field in both storages on the same lattice.
+  const VolumeConfig sparse_config = sparseRoom();
+  VolumeConfig dense_config = sparse_config;
+  dense_config.type = MapType::kDense;
+  dense_config.dims = Eigen::Vector3i(32, 32, 32);
+  TsdfVolume dense(dense_config);
+  SparseTsdfMap sparse(sparse_config);
+  auto field = [](const Eigen::Vector3f& p) { return 0.05f * std::sin(3.0f * p.x()) + 0.02f * p.y() - 0.03f * p.z(); };
+  for (int k = 0; k < 32; ++k)
+    for (int j = 0; j < 32; ++j)
+      for (int i = 0; i < 32; ++i) {
+        const Voxel v{field(dense.position(i, j, k)), 1.0f};
+        dense.setVoxel(i, j, k, v);
+        sparse.allocate(SparseTsdfMap::blockOf({i, j, k})).voxels[VoxelBlock::index(SparseTsdfMap::localOf({i, j, k}))] = v;
+      }
+  ASSERT_EQ(sparse.blockCount(), 64u);
+  int compared = 0;
+  for (float x = 0.0f; x < 31.0f; x += 0.37f) {
+    for (float y : {0.5f, 7.5f, 7.99f, 15.2f}) {  // inside blocks and straddling their borders
+      for (float z : {3.25f, 7.75f, 23.9f}) {
+        const Eigen::Vector3f p = dense.position(0, 0, 0) + dense.voxelSize() * Eigen::Vector3f(x, y, z);
+        FieldSample a, b;
+        ASSERT_TRUE(dense.sample(p, &a));
+        ASSERT_TRUE(sparse.sample(p, &b)) << p.transpose();
+        EXPECT_FLOAT_EQ(a.distance_m, b.distance_m);
+        EXPECT_TRUE(a.gradient.isApprox(b.gradient, 1e-5f));
+        ++compared;
+      }
+    }
+  }
+  EXPECT_GT(compared, 900);
+  FieldSample s;
+  EXPECT_FALSE(sparse.sample(dense.position(40, 3, 3), &s)) << "no block there";
+  EXPECT_FALSE(sparse.sample(Eigen::Vector3f::Constant(std::nanf("")), &s));
+  EXPECT_FALSE(sparse.sample(Eigen::Vector3f::Constant(1e9f), &s));
+}
+
+/// Frames of the synthetic room along the desk path, fused into a dense grid and a sparse map on
+/// the same lattice.
+struct FusionFixture : public ::testing::Test {
+  void SetUp() override {
+    const Integrator integrator(IntegratorConfig{});
+    for (int n = 0; n < 3; ++n) {
+      const Eigen::Isometry3d T_W_C = synthetic::cameraPose(synthetic::Motion::kDesk, n * 0.5, 10.0);
+      const DepthImage depth = test::renderRoom(T_W_C, camera);
+      integrator.integrate(depth, camera, T_W_C, &dense);
+      integrator.integrate(depth, camera, T_W_C, &sparse);
+    }
+  }
+  PinholeCamera camera = test::testCamera();
+  TsdfVolume dense{test::roomVolume()};
+  SparseTsdfMap sparse{sparseRoom()};
+};
+
+TEST_F(FusionFixture, FusedVoxelsEqualTheDenseGridsAndCoverItsTruncationBand) {
+  const Eigen::Vector3i dims = dense.dims();
+  size_t band = 0, covered = 0, same_history = 0, same_value = 0, sparse_only = 0;
+  for (int k = 0; k < dims.z(); ++k)
+    for (int j = 0; j < dims.y(); ++j)
+      for (int i = 0; i < dims.x(); ++i) {
+        const Voxel d = dense.voxel(i, j, k);
+        const Voxel s = sparse.voxel({i, j, k});
+        sparse_only += s.weight > 0.0f && d.weight <= 0.0f;  // only where rounding moved a voxel into the image
+        // Fused from the same frames (weights count them): the same value, unless rounding put
+        // the voxel's centre on the other side of a pixel border in one of them.
+        const bool same_frames = s.weight > 0.0f && s.weight == d.weight;
+        same_value += same_frames && std::fabs(d.distance_m - s.distance_m) < 1e-5f;
+        if (d.weight > 0.0f && d.distance_m < dense.positiveTruncation()) {
+          ++band;
+          covered += s.weight > 0.0f;
+          same_history += d.weight == s.weight;
+        }
+      }
+  EXPECT_GT(band, 100000u);
+  // Only depth edges narrower than the allocation's ray spacing may miss a block in some frame.
+  EXPECT_GE(static_cast<double>(covered), 0.999 * band) << covered << " of " << band << " voxels in the band";
+  EXPECT_GE(static_cast<double>(same_history), 0.995 * band) << same_history << " of " << band;
+  EXPECT_GE(static_cast<double>(same_value), 0.999 * same_history) << same_value << " of " << same_history;
+  EXPECT_LE(static_cast<double>(sparse_only), 1e-4 * band) << sparse_only << " voxels observed by the sparse map alone";
+  EXPECT_LT(sparse.memoryBytes(), dense.memoryBytes() / 2) << "memory follows the surface, not the extent";
+}
+
+TEST_F(FusionFixture, SurfacesMatchTheDenseGrids) {
+  // The sparse map also holds the far walls, beyond the dense grid: compare inside the grid only
+  // (a cell short of its faces, where the dense grid has no neighbours to mesh with).
+  const Eigen::AlignedBox3f grid(dense.position(1, 1, 1), dense.position(dense.dims() - 2 * Eigen::Vector3i::Ones()));
+  const SurfaceCloud a = extractSurfaceCloud(dense), b = extractSurfaceCloud(sparse);
+  auto countInside = [&grid](const std::vector<Eigen::Vector3f>& points) {
+    return static_cast<double>(std::count_if(points.begin(), points.end(), [&](const auto& p) { return grid.contains(p); }));
+  };
+  const double points_dense = countInside(a.points_W), points_sparse = countInside(b.points_W);
+  ASSERT_GT(points_dense, 10000);
+  EXPECT_NEAR(points_sparse, points_dense, 0.002 * points_dense);
+  const TriangleMesh mesh_a = extractMesh(dense), mesh_b = extractMesh(sparse);
+  auto trianglesInside = [&grid](const TriangleMesh& mesh) {
+    return static_cast<double>(std::count_if(mesh.triangles.begin(), mesh.triangles.end(), [&](const auto& t) {
+      return grid.contains(mesh.vertices_W[t[0]]) && grid.contains(mesh.vertices_W[t[1]]) &&
+             grid.contains(mesh.vertices_W[t[2]]);
+    }));
+  };
+  const double triangles_dense = trianglesInside(mesh_a);
+  EXPECT_NEAR(trianglesInside(mesh_b), triangles_dense, 0.002 * triangles_dense);
+  // Every block's piece is a closed part of the whole: the pieces add up to the mesh.
+  size_t triangles = 0;
+  for (const BlockIndex& b_index : sparse.blockIndices()) triangles += extractBlockMesh(sparse, b_index).triangles.size();
+  EXPECT_EQ(triangles, mesh_b.triangles.size());
+}
+
+TEST_F(FusionFixture, ADenseRegionAndALiveCopyHoldTheSameVoxels) {
+  Eigen::Vector3i first, dims;
+  sparse.bounds(&first, &dims);
+  const TsdfVolume region = sparse.toDense(first, dims);
+  for (const Eigen::Vector3i& v : {Eigen::Vector3i(0, 0, 0), Eigen::Vector3i(dims / 2), Eigen::Vector3i(dims.x() - 1, 3, 9)}) {
+    const Voxel a = region.voxel(v.x(), v.y(), v.z()), b = sparse.voxel(first + v);
+    EXPECT_EQ(a.distance_m, b.distance_m);
+    EXPECT_EQ(a.weight, b.weight);
+    EXPECT_TRUE(region.position(v.x(), v.y(), v.z()).isApprox(sparse.position(first + v), 1e-5f));
+  }
+
+  // A copy kept up to date from the blocks changed since it was taken.
+  SparseTsdfMap copy(sparse);
+  const uint64_t synced = sparse.revision();
+  const Eigen::Isometry3d T_W_C = synthetic::cameraPose(synthetic::Motion::kDesk, 4.0, 10.0);
+  Integrator(IntegratorConfig{}).integrate(test::renderRoom(T_W_C, camera), camera, T_W_C, &sparse);
+  const std::vector<BlockIndex> changed = sparse.changedSince(synced);
+  ASSERT_FALSE(changed.empty());
+  EXPECT_LT(changed.size(), sparse.blockCount());
+  copy.copyBlocksFrom(sparse, changed);
+  EXPECT_EQ(copy.blockCount(), sparse.blockCount());
+  EXPECT_EQ(test::totalWeight(copy), test::totalWeight(sparse));
+  sparse.clear();
+  EXPECT_EQ(sparse.blockCount(), 0u);
+  EXPECT_GT(sparse.clearedAt(), synced) << "a reader can tell that its copy is stale";
+}
+
+TEST(SparseMap, TracksTheDeskPathAsTheDenseGridDoes) {
+  const PinholeCamera camera = test::testCamera();
+  Settings settings = preset("default");
+  // A dense grid that holds the whole room, so that both maps see the same walls.
+  settings.pipeline.volume.dims = Eigen::Vector3i(160, 160, 160);
+  settings.pipeline.volume.voxel_size_m = 0.04;
+  settings.pipeline.initial_camera_in_grid = Eigen::Vector3d(0.5, 0.5, 0.4);
+  SdfPipeline dense(settings.pipeline);
+  setParameter(&settings, "MapType", std::string("sparse"));
+  SdfPipeline sparse(settings.pipeline);
+  ASSERT_EQ(sparse.map().type(), MapType::kSparse);
+  synthetic::NoiseModel kinect;
+  const synthetic::Scene room = synthetic::Scene::indoorRoom();
+  double worst_m = 0.0;
+  for (int i = 0; i < 60; ++i) {
+    const Eigen::Isometry3d T_scene_C = synthetic::cameraPose(synthetic::Motion::kDesk, i / 30.0, 10.0);
+    const DepthImage depth = room.render(camera, T_scene_C, kinect, static_cast<uint32_t>(i));
+    const FrameReport a = dense.processFrame(depth, camera, i / 30.0);
+    const FrameReport b = sparse.processFrame(depth, camera, i / 30.0);
+    ASSERT_TRUE(a.track.tracked() && b.track.tracked()) << "frame " << i;
+    worst_m = std::max(worst_m, (dense.pose().translation() - sparse.pose().translation()).norm());
+  }
+  EXPECT_LT(worst_m, 1e-3) << "trajectories of the two storages part by " << worst_m << " m";
+  EXPECT_LT(sparse.map().memoryBytes(), dense.map().memoryBytes() / 4);
+}
+
+TEST(SparseMap, SettingsRefuseCompactVoxelsForTheSparseMap) {
+  Settings settings = preset("default");
+  setParameter(&settings, "MapType", std::string("sparse"));
+  setParameter(&settings, "CompactVoxels", true);
+  const std::vector<std::string> errors = settings.validate();
+  ASSERT_FALSE(errors.empty());
+  EXPECT_NE(errors.front().find("CompactVoxels"), std::string::npos) << errors.front();
+  EXPECT_NE(errors.front().find("MapType"), std::string::npos) << errors.front();
+  EXPECT_THROW(setParameter(&settings, "MapType", std::string("octree")), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sdf_tracker
