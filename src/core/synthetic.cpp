@@ -1,5 +1,6 @@
 #include "sdf_tracker/core/synthetic.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iomanip>
@@ -117,6 +118,92 @@ Scene Scene::indoorRoom() {
   return scene;
 }
 
+namespace {
+
+// The house's heights: y points down, the floor is at y = 1.3 m and the ceiling 2.5 m above it,
+// so a camera at y = 0 is at eye height.
+constexpr double kFloorY = 1.3;
+constexpr double kCeilingY = -1.2;
+constexpr double kWallHalfThickness = 0.05;
+constexpr double kDoorTopY = kFloorY - 2.0;
+
+/// A piece of wall in the plane x = const from z0 to z1, between heights y0 and y1 (y0 < y1).
+Primitive wallAlongZ(double x, double z0, double z1, double y0 = kCeilingY, double y1 = kFloorY) {
+  return box({x, 0.5 * (y0 + y1), 0.5 * (z0 + z1)}, {kWallHalfThickness, 0.5 * (y1 - y0), 0.5 * (z1 - z0)});
+}
+Primitive wallAlongX(double z, double x0, double x1, double y0 = kCeilingY, double y1 = kFloorY) {
+  return box({0.5 * (x0 + x1), 0.5 * (y0 + y1), z}, {0.5 * (x1 - x0), 0.5 * (y1 - y0), kWallHalfThickness});
+}
+
+/// A wall in the plane z = const from x0 to x1 with 1 m wide doors centred at door_x: the pieces
+/// between the doors, and a lintel above each door.
+void addWallWithDoors(Scene* scene, double z, double x0, double x1, const std::vector<double>& door_x) {
+  double from = x0;
+  for (double door : door_x) {
+    scene->add(wallAlongX(z, from, door - 0.5));
+    scene->add(wallAlongX(z, door - 0.5, door + 0.5, kCeilingY, kDoorTopY));
+    from = door + 0.5;
+  }
+  scene->add(wallAlongX(z, from, x1));
+}
+
+/// A box standing on the floor at (x, z), turned by yaw about the vertical.
+Primitive onFloor(double x, double z, double half_x, double height, double half_z, double yaw = 0.0) {
+  return box({x, kFloorY - 0.5 * height, z}, {half_x, 0.5 * height, half_z}, rotation(0.0, yaw, 0.0));
+}
+
+}  // namespace
+
+Scene Scene::house() {
+  Scene scene;
+  // Shell: floor, ceiling and the outer walls of x in [0, 12], z in [-4, 6].
+  scene.add(box({6.0, kFloorY + 0.05, 1.0}, {6.2, 0.05, 5.2}));
+  scene.add(box({6.0, kCeilingY - 0.05, 1.0}, {6.2, 0.05, 5.2}));
+  scene.add(wallAlongZ(0.0, -4.0, 6.0));
+  scene.add(wallAlongZ(12.0, -4.0, 6.0));
+  scene.add(wallAlongX(-4.0, 0.0, 12.0));
+  scene.add(wallAlongX(6.0, 0.0, 12.0));
+  // The corridor z in [0, 2]; rooms south (z < 0) at x in [0, 4], [4, 8], [8, 12] and north
+  // (z > 2) at x in [0, 6], [6, 12].
+  addWallWithDoors(&scene, 0.0, 0.0, 12.0, {2.0, 6.0, 10.0});
+  addWallWithDoors(&scene, 2.0, 0.0, 12.0, {3.0, 9.0});
+  scene.add(wallAlongZ(4.0, -4.0, 0.0));
+  scene.add(wallAlongZ(8.0, -4.0, 0.0));
+  scene.add(wallAlongZ(6.0, 2.0, 6.0));
+  // Corridor: cabinets against the walls and pictures at eye height, so that its length is seen.
+  scene.add(onFloor(4.5, 1.75, 0.3, 1.0, 0.2));
+  scene.add(onFloor(7.5, 0.25, 0.4, 0.9, 0.2));
+  scene.add(onFloor(11.5, 1.0, 0.25, 1.2, 0.5));
+  for (double x : {1.2, 5.2, 10.4}) scene.add(box({x, -0.1, 1.92}, {0.3, 0.2, 0.03}));
+  for (double x : {3.6, 7.0, 11.2}) scene.add(box({x, -0.2, 0.08}, {0.25, 0.3, 0.03}));
+  // Rooms.
+  scene.add(onFloor(1.0, -3.2, 0.5, 0.8, 0.35, 0.2));
+  scene.add(onFloor(3.5, -1.0, 0.25, 1.6, 0.25));
+  scene.add(sphere({3.3, kFloorY - 0.3, -3.4}, 0.3));
+  scene.add(onFloor(5.0, -3.3, 0.6, 0.75, 0.4, -0.3));
+  scene.add(onFloor(7.3, -2.0, 0.3, 1.2, 0.6));
+  scene.add(sphere({6.0, kFloorY - 0.25, -2.8}, 0.25));
+  scene.add(onFloor(9.0, -3.0, 0.4, 1.0, 0.4, 0.6));
+  scene.add(onFloor(11.3, -1.5, 0.3, 0.9, 0.8));
+  scene.add(box({10.5, -0.3, -3.9}, {0.4, 0.3, 0.02}, rotation(0.3, 0.0, 0.4)));
+  scene.add(onFloor(1.0, 5.0, 0.6, 0.8, 0.4));
+  scene.add(onFloor(4.5, 3.2, 0.5, 0.5, 0.5, 0.4));
+  scene.add(sphere({2.0, kFloorY - 0.3, 4.0}, 0.3));
+  scene.add(onFloor(5.5, 5.5, 0.3, 1.8, 0.3));
+  scene.add(onFloor(7.0, 5.2, 0.8, 0.75, 0.5, 0.1));
+  scene.add(onFloor(11.0, 3.0, 0.4, 1.4, 0.4));
+  scene.add(sphere({10.0, kFloorY - 0.25, 5.0}, 0.25));
+  return scene;
+}
+
+Scene Scene::forMotion(Motion motion) {
+  switch (motion) {
+    case Motion::kPlanar: return singleWall();
+    case Motion::kWalk: return house();
+    default: return indoorRoom();
+  }
+}
+
 Scene Scene::singleWall() {
   Scene scene;
   scene.add(box({0.0, 0.0, 2.05}, {20.0, 20.0, 0.05}));
@@ -181,10 +268,10 @@ DepthImage Scene::render(const PinholeCamera& camera, const Eigen::Isometry3d& T
 }
 
 Motion parseMotion(const std::string& name) {
-  for (Motion m : {Motion::kDesk, Motion::kSlow, Motion::kFast, Motion::kPlanar, Motion::kLoop}) {
+  for (Motion m : {Motion::kDesk, Motion::kSlow, Motion::kFast, Motion::kPlanar, Motion::kLoop, Motion::kWalk}) {
     if (toString(m) == name) return m;
   }
-  throw std::invalid_argument("unknown motion \"" + name + "\" (known: desk, slow, fast, planar, loop)");
+  throw std::invalid_argument("unknown motion \"" + name + "\" (known: desk, slow, fast, planar, loop, walk)");
 }
 
 std::string toString(Motion motion) {
@@ -194,11 +281,83 @@ std::string toString(Motion motion) {
     case Motion::kFast: return "fast";
     case Motion::kPlanar: return "planar";
     case Motion::kLoop: return "loop";
+    case Motion::kWalk: return "walk";
   }
   return "unknown";
 }
 
+namespace {
+
+/// The walk through the house: a Catmull-Rom curve through waypoints on the floor plan (x, z),
+/// sampled densely and parametrised by arc length.
+class WalkPath {
+ public:
+  WalkPath() {
+    const std::vector<Eigen::Vector2d> waypoints = {
+        {1.0, 1.0},  {2.0, 1.0},  {2.0, -1.0}, {3.0, -2.5}, {1.5, -3.0}, {1.0, -1.8}, {2.0, -0.8},   // room 1
+        {2.2, 1.0},  {3.0, 1.2},  {3.0, 3.0},  {4.5, 4.5},  {2.0, 5.0},  {1.5, 3.5},  {3.0, 2.8},   // room 4
+        {3.2, 1.0},  {6.0, 1.0},  {6.0, -1.0}, {7.0, -2.5}, {5.0, -3.0}, {5.5, -1.2}, {6.0, 0.6},   // room 2
+        {7.5, 1.1},  {9.0, 1.0},  {9.0, 3.0},  {10.5, 4.5}, {7.5, 4.6},  {8.0, 3.0},  {9.0, 1.6},   // room 5
+        {10.0, 1.0}, {10.0, -1.0}, {11.0, -2.8}, {9.0, -3.0}, {9.6, -1.0}, {10.0, 1.0}, {7.0, 1.0},  // room 3
+        {4.0, 1.0},  {1.5, 1.0}};                                                                     // back
+    constexpr int kSamplesPerSegment = 64;
+    for (size_t i = 0; i + 1 < waypoints.size(); ++i) {
+      const Eigen::Vector2d& p0 = waypoints[i == 0 ? 0 : i - 1];
+      const Eigen::Vector2d& p1 = waypoints[i];
+      const Eigen::Vector2d& p2 = waypoints[i + 1];
+      const Eigen::Vector2d& p3 = waypoints[std::min(i + 2, waypoints.size() - 1)];
+      for (int k = 0; k < kSamplesPerSegment; ++k) {
+        const double t = static_cast<double>(k) / kSamplesPerSegment;
+        const Eigen::Vector2d p = 0.5 * ((2.0 * p1) + (p2 - p0) * t + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * t * t +
+                                         (3.0 * p1 - p0 - 3.0 * p2 + p3) * t * t * t);
+        append(p);
+      }
+    }
+    append(waypoints.back());
+  }
+
+  double length() const { return arc_.back(); }
+
+  /// The point at arc length s, clamped to the ends.
+  Eigen::Vector2d at(double s) const {
+    s = std::max(0.0, std::min(s, length()));
+    const size_t i = std::min<size_t>(std::upper_bound(arc_.begin(), arc_.end(), s) - arc_.begin(), arc_.size() - 1);
+    if (i == 0) return points_.front();
+    const double f = (s - arc_[i - 1]) / std::max(arc_[i] - arc_[i - 1], 1e-12);
+    return points_[i - 1] + f * (points_[i] - points_[i - 1]);
+  }
+
+ private:
+  void append(const Eigen::Vector2d& p) {
+    arc_.push_back(points_.empty() ? 0.0 : arc_.back() + (p - points_.back()).norm());
+    points_.push_back(p);
+  }
+  std::vector<Eigen::Vector2d> points_;
+  std::vector<double> arc_;
+};
+
+constexpr double kWalkSpeed_m_s = 0.5;
+
+Eigen::Isometry3d walkPose(double t_s) {
+  static const WalkPath path;
+  const double s = kWalkSpeed_m_s * t_s;
+  const Eigen::Vector2d here = path.at(s);
+  // Looking where the path goes over the next and last 0.4 m smooths the turns at the waypoints;
+  // a slow sway of the head sweeps the walls.
+  Eigen::Vector2d heading = path.at(s + 0.4) - path.at(s - 0.4);
+  if (heading.norm() < 1e-6) heading = Eigen::Vector2d(1.0, 0.0);
+  const double yaw = std::atan2(heading.x(), heading.y()) + 0.25 * std::sin(0.7 * t_s);
+  const double pitch_down = 0.25 + 0.08 * std::sin(0.45 * t_s);
+  const Eigen::Vector3d eye(here.x(), 0.02 * std::sin(2.0 * M_PI * 1.8 * t_s), here.y());
+  const Eigen::Vector3d forward(std::sin(yaw) * std::cos(pitch_down), std::sin(pitch_down),
+                                std::cos(yaw) * std::cos(pitch_down));
+  return lookAt(eye, eye + forward, 0.03 * std::sin(0.9 * t_s));
+}
+
+}  // namespace
+
 Eigen::Isometry3d cameraPose(Motion motion, double t_s, double duration_s) {
+  if (motion == Motion::kWalk) return walkPose(t_s);
   if (motion == Motion::kPlanar) {
     // Facing the wall 2 m away, sliding sideways and up/down: nothing fixes x, y or the roll.
     return lookAt({0.6 * std::sin(0.5 * t_s), 0.2 * std::sin(0.8 * t_s), 0.0},
@@ -224,7 +383,7 @@ void writeSequence(const std::string& directory, const SequenceSpec& spec) {
                                 ", " + std::to_string(spec.rate_hz) + ")");
   }
   io::makeDirectories(directory + "/depth");
-  const Scene scene = spec.motion == Motion::kPlanar ? Scene::singleWall() : Scene::indoorRoom();
+  const Scene scene = Scene::forMotion(spec.motion);
   const double duration = spec.frames / spec.rate_hz;
   std::ostringstream depth_list, ground_truth, intrinsics;
   depth_list << "# synthetic depth (sdf_tracker), motion " << toString(spec.motion) << ", noise "

@@ -183,7 +183,7 @@ int run(int argc, char** argv) {
 
   std::ostringstream frames_csv;
   frames_csv << "timestamp,status,iterations,rms_residual_m,valid_points,inverse_condition,constrained_rank,"
-                "tracking_ms,fusion_ms,fused,message\n";
+                "tracking_ms,fusion_ms,fused,map_mb,message\n";
   std::vector<st::io::StampedPose> trajectory;
   std::vector<double> frame_ms, tracking_ms, fusion_ms, raycast_ms;
   size_t failed = 0, degenerate = 0;
@@ -214,7 +214,7 @@ int run(int argc, char** argv) {
                << joinIterations(t.iterations_per_level) << ',' << std::setprecision(6) << t.rms_residual_m << ','
                << t.valid_points << ',' << std::setprecision(6) << t.inverse_condition << ',' << t.constrained_rank
                << ',' << std::setprecision(3) << report.tracking_ms << ',' << report.fusion_ms << ','
-               << (report.fused ? 1 : 0) << ',' << message << '\n';
+               << (report.fused ? 1 : 0) << ',' << pipeline.map().memoryBytes() / 1048576.0 << ',' << message << '\n';
     progress.update(i + 1);
   }
   progress.finish();

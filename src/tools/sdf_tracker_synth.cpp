@@ -14,7 +14,7 @@ Renders an analytic indoor scene along a scripted camera path, in TUM layout
 (depth.txt, depth/*.png, groundtruth.txt, intrinsics.txt).
 
   --output DIR       folder to write (created)
-  --motion NAME      desk (default) | slow | fast | planar | loop
+  --motion NAME      desk (default) | slow | fast | planar | loop | walk (through a house, 0.5 m/s)
   --frames N         number of frames (default 300, at 30 Hz)
   --seed N           noise seed (default 1)
   --size WxH         image size: 640x480 (default), 320x240 or 160x120 (freiburg1 intrinsics, scaled)

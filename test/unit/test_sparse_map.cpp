@@ -212,6 +212,30 @@ TEST(SparseMap, TracksTheDeskPathAsTheDenseGridDoes) {
   EXPECT_LT(sparse.map().memoryBytes(), dense.map().memoryBytes() / 4);
 }
 
+TEST(HouseWalk, WalksAtHalfAMetrePerSecondInsideTheHouseAndAlwaysSeesIt) {
+  // 2,600 frames at 30 Hz cover about 43 m; the path must be at least that long.
+  double length_m = 0.0;
+  Eigen::Vector3d previous = synthetic::cameraPose(synthetic::Motion::kWalk, 0.0, 0.0).translation();
+  const synthetic::Scene house = synthetic::Scene::forMotion(synthetic::Motion::kWalk);
+  synthetic::NoiseModel exact;
+  exact.enabled = false;
+  const PinholeCamera camera = test::testCamera();
+  for (int i = 1; i <= 2600; ++i) {
+    const Eigen::Isometry3d T_W_C = synthetic::cameraPose(synthetic::Motion::kWalk, i / 30.0, 0.0);
+    const Eigen::Vector3d here = T_W_C.translation();
+    const double step_m = (here - previous).norm();
+    ASSERT_LT(step_m, 0.03) << "frame " << i << ": faster than a walk";
+    length_m += step_m;
+    previous = here;
+    ASSERT_TRUE(here.x() > 0.4 && here.x() < 11.6 && here.z() > -3.6 && here.z() < 5.6) << "frame " << i;
+    if (i % 200 == 0) {
+      const DepthImage depth = house.render(camera, T_W_C, exact, 0);
+      EXPECT_GT(depth.countMeasurements(), depth.width() * depth.height() / 2) << "frame " << i << " sees little";
+    }
+  }
+  EXPECT_GT(length_m, 43.0);
+}
+
 TEST(SparseMap, SettingsRefuseCompactVoxelsForTheSparseMap) {
   Settings settings = preset("default");
   setParameter(&settings, "MapType", std::string("sparse"));

@@ -38,12 +38,19 @@ struct NoiseModel {
   double axial_noise_scale = 1.0;
 };
 
+enum class Motion;
+
 class Scene {
  public:
   /// A room with a desk, objects on it, a cabinet and a slanted panel: every axis constrained.
   static Scene indoorRoom();
   /// One large wall and nothing else: three degrees of freedom unconstrained.
   static Scene singleWall();
+  /// A 12 m x 10 m flat: a 2 m wide corridor along x with three rooms on one side and two on the
+  /// other, doors, furniture, and pictures on the corridor's walls.
+  static Scene house();
+  /// The scene a path is made for.
+  static Scene forMotion(Motion motion);
 
   void add(const Primitive& p) { primitives_.push_back(p); }
 
@@ -66,11 +73,13 @@ enum class Motion {
   kFast,    ///< the same path at twice the speed
   kPlanar,  ///< sliding along a single wall: degenerate geometry
   kLoop,    ///< a closed circle around the desk, ending where it started
+  kWalk,    ///< walking at 0.5 m/s through the house: along the corridor and round every room
 };
 Motion parseMotion(const std::string& name);  ///< throws std::invalid_argument
 std::string toString(Motion motion);
 
-/// Camera to world at time t [s] along a path.
+/// Camera to world at time t [s] along a path. duration_s only sets the loop's period; the walk
+/// keeps its speed and its path (about 50 m) whatever the duration.
 Eigen::Isometry3d cameraPose(Motion motion, double t_s, double duration_s);
 
 struct SequenceSpec {

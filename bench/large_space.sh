@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Issue 10's large-space bench: a walk of about 42 m through the synthetic house (a corridor and
+# five rooms; 2,500 frames at 30 Hz, 640x480, Kinect-like noise), tracked with the sparse map and,
+# for comparison, the dense grid (a 5 m cube, which the walk leaves). Reports every frame tracked
+# or not, ATE, the peak resident memory, and ms per frame and map memory against the path length.
+# Writes bench/results/<date>_large_space.md with a plot beside it.
+#   bash bench/large_space.sh [FRAMES]     (about 10 minutes on 2 cores, half of it rendering)
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+frames="${1:-2500}"
+work="$repo/build/bench/large_space"
+results="$repo/bench/results"
+mkdir -p "$work" "$results"
+
+# shellcheck source=../scripts/workspace.sh
+source "$repo/scripts/workspace.sh"
+require_matplotlib
+
+walk="$work/walk_$frames"
+if [ ! -f "$walk/depth.txt" ]; then
+  echo "rendering the walk ($frames frames)"
+  "$bin/sdf_tracker_synth" --output "$walk" --motion walk --frames "$frames" --seed 7 >/dev/null
+fi
+for map in sparse dense; do
+  echo "tracking the walk with MapType=$map"
+  "$bin/sdf_tracker_offline" --sequence "$walk" --output "$work/$map" --quiet --threads 2 --param MapType=$map \
+    > "$work/$map.log" 2>&1 || echo "  failed: see $work/$map.log"
+done
+report="$results/$(date +%Y-%m-%d)_large_space.md"
+/usr/bin/python3 "$repo/bench/large_space_report.py" "$walk" "$work" "$report"
+echo "wrote $report"
