@@ -11,12 +11,8 @@
 #   bash bench/accuracy.sh [SEQUENCE_DIR ...]     (about 40 minutes on 2 cores)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
-work="$repo/build/bench/accuracy"
-results="$repo/bench/results"
-mkdir -p "$work/runs" "$results"
-
-# shellcheck source=../scripts/workspace.sh
-source "$repo/scripts/workspace.sh"
+bench_setup accuracy
+mkdir -p "$work/runs"
 require_matplotlib
 
 real_sequences "$@"

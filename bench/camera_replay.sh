@@ -10,12 +10,8 @@
 set -euo pipefail
 # shellcheck source=common.sh
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
-work="$repo/build/bench/cameras"
-report="$repo/bench/results/$(date +%Y-%m-%d)_cameras.md"
-mkdir -p "$work" "$(dirname "$report")"
-
-# shellcheck source=../scripts/workspace.sh
-source "$repo/scripts/workspace.sh"
+bench_setup cameras
+report="$results/$(date +%Y-%m-%d)_cameras.md"
 
 real_sequences "$@"
 

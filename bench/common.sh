@@ -4,7 +4,9 @@
 # with TUM fr1_xyz and 7-Scenes redkitchen from $data, saying SKIPPED for each one missing; and
 # synthetic_sequence: `synthetic_sequence BIN WORK MOTION` prints the folder of the bench's synthetic
 # sequence with that motion (300 frames, seed 21), generating it under WORK the first time; and
-# require_matplotlib, which installs Debian's matplotlib for the reports' plots when it is missing.
+# require_matplotlib, which installs Debian's matplotlib for the reports' plots when it is missing;
+# and bench_setup: `bench_setup NAME` sets `work` to build/bench/NAME (build/bench for "") and
+# `results` to bench/results, creates both, and installs, builds and sources the workspace (`bin`).
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 data="${SDF_TRACKER_DATA:-$repo/../shared/data}"
 
@@ -26,4 +28,12 @@ synthetic_sequence() {
 require_matplotlib() {
   dpkg-query -W -f='${Status}' python3-matplotlib 2>/dev/null | grep -q "install ok installed" ||
     { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3-matplotlib >/dev/null; }
+}
+
+bench_setup() {
+  work="$repo/build/bench${1:+/$1}"
+  results="$repo/bench/results"
+  mkdir -p "$work" "$results"
+  # shellcheck source=../scripts/workspace.sh
+  source "$repo/scripts/workspace.sh"
 }

@@ -8,12 +8,7 @@
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 frames="${1:-2500}"
-work="$repo/build/bench/large_space"
-results="$repo/bench/results"
-mkdir -p "$work" "$results"
-
-# shellcheck source=../scripts/workspace.sh
-source "$repo/scripts/workspace.sh"
+bench_setup large_space
 require_matplotlib
 
 walk="$work/walk_$frames"

@@ -12,13 +12,9 @@
 set -euo pipefail
 # shellcheck source=common.sh
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
-work="$repo/build/bench/node"
+bench_setup node
 runs_name="${RUNS:-}"
-report="$repo/bench/results/$(date +%Y-%m-%d)_node${runs_name:+_${runs_name// /_}}.md"
-mkdir -p "$work" "$(dirname "$report")"
-
-# shellcheck source=../scripts/workspace.sh
-source "$repo/scripts/workspace.sh"
+report="$results/$(date +%Y-%m-%d)_node${runs_name:+_${runs_name// /_}}.md"
 
 real_sequences "$@"
 

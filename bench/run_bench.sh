@@ -8,12 +8,8 @@
 # ray casting where listed); no test asserts any of them.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
-work="$repo/build/bench"
-results="$repo/bench/results"
-mkdir -p "$work/runs" "$results"
-
-# shellcheck source=../scripts/workspace.sh
-source "$repo/scripts/workspace.sh"
+bench_setup ""
+mkdir -p "$work/runs"
 require_matplotlib
 
 sequences=()

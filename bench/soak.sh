@@ -6,13 +6,11 @@
 #   bash bench/soak.sh [FRAMES]       (default 10000; about 4 minutes on 2 cores)
 # Writes bench/results/<date>_soak.md.
 set -euo pipefail
-repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# shellcheck source=common.sh
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 frames="${1:-10000}"
-work="$repo/build/bench/soak"
-report="$repo/bench/results/$(date +%Y-%m-%d)_soak.md"
-mkdir -p "$work" "$(dirname "$report")"
-# shellcheck source=../scripts/workspace.sh
-source "$repo/scripts/workspace.sh"
+bench_setup soak
+report="$results/$(date +%Y-%m-%d)_soak.md"
 
 sequence="$work/loop_qvga"
 [ -f "$sequence/depth.txt" ] || "$bin/sdf_tracker_synth" --output "$sequence" --motion loop --frames 300 --seed 9 \

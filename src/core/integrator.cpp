@@ -180,12 +180,8 @@ std::vector<SparseTsdfMap::BlockIndex> blocksInBand(const DepthImage& depth, con
         const Eigen::Vector3f centre =
             map.toLattice(T_W_C.translation() + (z_near + (z_far - z_near) * s / steps) * ray_W);
         if (!SparseTsdfMap::withinReach(centre)) continue;
-        auto blockAt = [](const Eigen::Vector3f& lattice) {
-          return SparseTsdfMap::blockOf(Eigen::Vector3i(static_cast<int>(std::floor(lattice.x())),
-                                                        static_cast<int>(std::floor(lattice.y())),
-                                                        static_cast<int>(std::floor(lattice.z()))));
-        };
-        const SparseTsdfMap::BlockIndex lo = blockAt(centre.array() - slack), hi = blockAt(centre.array() + slack);
+        const SparseTsdfMap::BlockIndex lo = SparseTsdfMap::blockContaining(centre.array() - slack);
+        const SparseTsdfMap::BlockIndex hi = SparseTsdfMap::blockContaining(centre.array() + slack);
         for (int bz = lo.z(); bz <= hi.z(); ++bz)
           for (int by = lo.y(); by <= hi.y(); ++by)
             for (int bx = lo.x(); bx <= hi.x(); ++bx) {
@@ -195,33 +191,37 @@ std::vector<SparseTsdfMap::BlockIndex> blocksInBand(const DepthImage& depth, con
             }
       }
     }
-    std::sort(found.begin(), found.end());
-    found.erase(std::unique(found.begin(), found.end()), found.end());
   }
   std::vector<uint64_t> keys;
   for (const auto& found : per_row) keys.insert(keys.end(), found.begin(), found.end());
-  std::sort(keys.begin(), keys.end());
-  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  std::vector<SparseTsdfMap::BlockIndex> blocks;
-  blocks.reserve(keys.size());
-  for (uint64_t key : keys) blocks.push_back(SparseTsdfMap::indexOf(key));
-  return blocks;
+  return SparseTsdfMap::indicesOf(std::move(keys));
 }
 
-/// Whether any part of a sphere (centre in the camera frame) can lie inside the viewing frustum
-/// between the camera and z_far.
-bool sphereMayBeVisible(const Eigen::Vector3f& c_C, float radius, const PinholeCamera& camera, float z_far) {
-  if (c_C.z() < -radius || c_C.z() > z_far + radius) return false;
-  // The four side planes through the camera centre and the image's outer pixel edges.
-  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
-  const float left = static_cast<float>(camera.cx) + 0.5f, right = camera.width - 0.5f - static_cast<float>(camera.cx);
-  const float top = static_cast<float>(camera.cy) + 0.5f, bottom = camera.height - 0.5f - static_cast<float>(camera.cy);
-  auto inside = [&](float a, float b, float value_a, float value_b) {
-    return a * value_a + b * value_b >= -radius * std::hypot(a, b);
-  };
-  return inside(fx, left, c_C.x(), c_C.z()) && inside(-fx, right, c_C.x(), c_C.z()) &&
-         inside(fy, top, c_C.y(), c_C.z()) && inside(-fy, bottom, c_C.y(), c_C.z());
-}
+/// The viewing frustum's four side planes, through the camera centre and the image's outer pixel
+/// edges, as unit normals pointing inwards (camera frame), and its depth range.
+class Frustum {
+ public:
+  Frustum(const PinholeCamera& camera, float z_far) : z_far_(z_far) {
+    const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
+    const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
+    normals_[0] = Eigen::Vector3f(fx, 0.0f, cx + 0.5f).normalized();
+    normals_[1] = Eigen::Vector3f(-fx, 0.0f, camera.width - 0.5f - cx).normalized();
+    normals_[2] = Eigen::Vector3f(0.0f, fy, cy + 0.5f).normalized();
+    normals_[3] = Eigen::Vector3f(0.0f, -fy, camera.height - 0.5f - cy).normalized();
+  }
+  /// Whether any part of the sphere (centre in the camera frame) can lie inside.
+  bool mayHoldSphere(const Eigen::Vector3f& c_C, float radius) const {
+    if (c_C.z() < -radius || c_C.z() > z_far_ + radius) return false;
+    for (const Eigen::Vector3f& n : normals_) {
+      if (n.dot(c_C) < -radius) return false;
+    }
+    return true;
+  }
+
+ private:
+  std::array<Eigen::Vector3f, 4> normals_;
+  float z_far_;
+};
 
 /// The sparse map: the blocks the band reaches are added, then every block the frustum may hold
 /// (new or seen before, so free space is carved as in the dense grid) is fused voxel by voxel.
@@ -236,12 +236,15 @@ size_t integrateSparse(const VoxelFusion& fusion, const DepthImage& depth, const
       added.push_back(index);
     }
   }
+  const Frustum frustum(camera, z_far);
   const float radius = 0.5f * std::sqrt(3.0f) * map->blockSize();
-  const Eigen::Vector3f centre_offset = Eigen::Vector3f::Constant(0.5f * (kBlockSide - 1) * map->voxelSize());
+  // From a block's first voxel to its centre, in the camera frame.
+  const Eigen::Vector3f centre_offset_C =
+      T_C_W.linear() * Eigen::Vector3f::Constant(0.5f * (kBlockSide - 1) * map->voxelSize());
   std::vector<std::pair<Eigen::Vector3f, VoxelBlock*>> visible;  // first voxel's centre in the camera frame
   map->forEachBlock([&](const SparseTsdfMap::BlockIndex& index, VoxelBlock& block) {
     const Eigen::Vector3f first_C = T_C_W * map->position(SparseTsdfMap::firstVoxel(index));
-    if (sphereMayBeVisible(first_C + T_C_W.linear() * centre_offset, radius, camera, z_far)) {
+    if (frustum.mayHoldSphere(first_C + centre_offset_C, radius)) {
       visible.emplace_back(first_C, &block);
     }
   });

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "sdf_tracker/core/tsdf_volume.h"
 #include "sdf_tracker/core/validation.h"
 
 namespace sdf_tracker {

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "sdf_tracker/core/se3.h"
+#include "sdf_tracker/core/tsdf_volume.h"
 #include "sdf_tracker/core/validation.h"
 
 namespace sdf_tracker {

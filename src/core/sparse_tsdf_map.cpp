@@ -5,21 +5,13 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 namespace sdf_tracker {
 
-namespace {
-
-VolumeConfig asSparse(VolumeConfig config) {
-  config.type = MapType::kSparse;
-  return config;
-}
-
-}  // namespace
-
 bool SparseTsdfMap::inKeyRange(const BlockIndex& block) { return block.cwiseAbs().maxCoeff() <= kMaxBlock; }
 
-SparseTsdfMap::SparseTsdfMap(const VolumeConfig& config) : TsdfMap(asSparse(config)) {}
+SparseTsdfMap::SparseTsdfMap(const VolumeConfig& config) : TsdfMap(config, MapType::kSparse) {}
 
 SparseTsdfMap::SparseTsdfMap(const SparseTsdfMap& other)
     : TsdfMap(other), revision_(other.revision_), cleared_at_(other.cleared_at_) {
@@ -61,15 +53,20 @@ void SparseTsdfMap::remove(const BlockIndex& block) {
   if (inKeyRange(block)) blocks_.erase(keyOf(block));
 }
 
-std::vector<SparseTsdfMap::BlockIndex> SparseTsdfMap::blockIndices() const {
-  std::vector<uint64_t> keys;
-  keys.reserve(blocks_.size());
-  for (const auto& entry : blocks_) keys.push_back(entry.first);
+std::vector<SparseTsdfMap::BlockIndex> SparseTsdfMap::indicesOf(std::vector<uint64_t> keys) {
   std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   std::vector<BlockIndex> indices;
   indices.reserve(keys.size());
   for (uint64_t key : keys) indices.push_back(indexOf(key));
   return indices;
+}
+
+std::vector<SparseTsdfMap::BlockIndex> SparseTsdfMap::blockIndices() const {
+  std::vector<uint64_t> keys;
+  keys.reserve(blocks_.size());
+  for (const auto& entry : blocks_) keys.push_back(entry.first);
+  return indicesOf(std::move(keys));
 }
 
 Voxel SparseTsdfMap::voxel(const Eigen::Vector3i& voxel) const {
@@ -94,7 +91,6 @@ void SparseTsdfMap::bounds(Eigen::Vector3i* first, Eigen::Vector3i* dims) const 
 
 TsdfVolume SparseTsdfMap::toDense(const Eigen::Vector3i& first, const Eigen::Vector3i& dims) const {
   VolumeConfig dense = config_;
-  dense.type = MapType::kDense;
   dense.dims = dims;
   dense.origin_W = config_.origin_W + config_.voxel_size_m * first.cast<double>();
   TsdfVolume volume(dense);
@@ -117,11 +113,7 @@ std::vector<SparseTsdfMap::BlockIndex> SparseTsdfMap::changedSince(uint64_t revi
   for (const auto& [key, block] : blocks_) {
     if (block->changed_at > revision) keys.push_back(key);
   }
-  std::sort(keys.begin(), keys.end());
-  std::vector<BlockIndex> indices;
-  indices.reserve(keys.size());
-  for (uint64_t key : keys) indices.push_back(indexOf(key));
-  return indices;
+  return indicesOf(std::move(keys));
 }
 
 void SparseTsdfMap::copyBlocksFrom(const SparseTsdfMap& source, const std::vector<BlockIndex>& blocks) {

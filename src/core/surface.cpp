@@ -158,7 +158,6 @@ void append(const TriangleMesh& part, TriangleMesh* mesh) {
 TsdfVolume paddedBlock(const SparseTsdfMap& map, const SparseTsdfMap::BlockIndex& index) {
   const Eigen::Vector3i first = SparseTsdfMap::firstVoxel(index);
   VolumeConfig config = map.config();
-  config.type = MapType::kDense;
   config.dims = Eigen::Vector3i::Constant(kBlockSide + 1);
   config.origin_W = map.config().origin_W + map.config().voxel_size_m * first.cast<double>();
   TsdfVolume padded(config);

@@ -1,6 +1,7 @@
 #include "sdf_tracker/core/tsdf_map.h"
 
 #include <sstream>
+#include <utility>
 
 #include "sdf_tracker/core/sparse_tsdf_map.h"
 #include "sdf_tracker/core/tsdf_volume.h"
@@ -50,12 +51,13 @@ std::string VolumeConfig::describe() const {
   return s.str();
 }
 
-TsdfMap::TsdfMap(const VolumeConfig& config) : config_(config) {
-  throwIfInvalid("volume config", config.validate());
-  voxel_size_ = static_cast<float>(config.voxel_size_m);
+TsdfMap::TsdfMap(VolumeConfig config, MapType type) : config_(std::move(config)) {
+  config_.type = type;
+  throwIfInvalid("volume config", config_.validate());
+  voxel_size_ = static_cast<float>(config_.voxel_size_m);
   inv_voxel_size_ = 1.0f / voxel_size_;
-  positive_truncation_ = static_cast<float>(config.positive_truncation_m);
-  origin_ = config.origin_W.cast<float>();
+  positive_truncation_ = static_cast<float>(config_.positive_truncation_m);
+  origin_ = config_.origin_W.cast<float>();
 }
 
 std::unique_ptr<TsdfMap> makeMap(const VolumeConfig& config) {

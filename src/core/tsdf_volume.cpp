@@ -8,16 +8,7 @@
 
 namespace sdf_tracker {
 
-namespace {
-
-VolumeConfig asDense(VolumeConfig config) {
-  config.type = MapType::kDense;
-  return config;
-}
-
-}  // namespace
-
-TsdfVolume::TsdfVolume(const VolumeConfig& config) : TsdfMap(asDense(config)) {
+TsdfVolume::TsdfVolume(const VolumeConfig& config) : TsdfMap(config, MapType::kDense) {
   stride_y_ = static_cast<size_t>(config.dims.x());
   stride_z_ = stride_y_ * config.dims.y();
   voxel_count_ = stride_z_ * config.dims.z();

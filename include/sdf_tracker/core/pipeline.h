@@ -15,7 +15,6 @@
 #include "sdf_tracker/core/raycaster.h"
 #include "sdf_tracker/core/tracker.h"
 #include "sdf_tracker/core/tsdf_map.h"
-#include "sdf_tracker/core/tsdf_volume.h"
 
 namespace sdf_tracker {
 

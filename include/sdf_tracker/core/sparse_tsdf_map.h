@@ -1,6 +1,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -67,6 +68,13 @@ class SparseTsdfMap : public TsdfMap {
     return {static_cast<int>(key & mask) - kMaxBlock - 1, static_cast<int>((key >> kKeyBits) & mask) - kMaxBlock - 1,
             static_cast<int>((key >> (2 * kKeyBits)) & mask) - kMaxBlock - 1};
   }
+  /// The block indices of these keys, sorted as blockIndices() lists them, without repeats.
+  static std::vector<BlockIndex> indicesOf(std::vector<uint64_t> keys);
+  /// The block that holds the voxel cell around continuous lattice coordinates (withinReach).
+  static BlockIndex blockContaining(const Eigen::Vector3f& lattice) {
+    return blockOf(Eigen::Vector3i(static_cast<int>(std::floor(lattice.x())), static_cast<int>(std::floor(lattice.y())),
+                                   static_cast<int>(std::floor(lattice.z()))));
+  }
   /// Whether continuous lattice coordinates lie within the blocks' reach (false for NaN).
   static bool withinReach(const Eigen::Vector3f& lattice) {
     // Written so that NaN fails the comparison.
@@ -110,7 +118,7 @@ class SparseTsdfMap : public TsdfMap {
   uint64_t beginRevision() { return ++revision_; }
   /// The revision of the last clear(): a copy synchronised before it must start afresh.
   uint64_t clearedAt() const { return cleared_at_; }
-  /// Blocks that changed after `revision`, in a fixed (sorted) order.
+  /// Blocks that changed after `revision` in a fixed (sorted) order.
   std::vector<BlockIndex> changedSince(uint64_t revision) const;
   /// Makes these blocks equal to `source`'s, removing those `source` no longer holds: lets a
   /// reader keep a copy of a live map up to date in short pieces (see changedSince()).

@@ -95,8 +95,9 @@ class TsdfMap {
   virtual std::unique_ptr<TsdfMap> clone() const = 0;
 
  protected:
-  /// Throws std::invalid_argument naming every violation of the config.
-  explicit TsdfMap(const VolumeConfig& config);
+  /// The config's geometry with `type` for its storage; throws std::invalid_argument naming every
+  /// violation of the config.
+  TsdfMap(VolumeConfig config, MapType type);
   TsdfMap(const TsdfMap&) = default;
   TsdfMap& operator=(const TsdfMap&) = default;
   TsdfMap(TsdfMap&&) = default;
