@@ -94,41 +94,61 @@ struct FusionFixture : public ::testing::Test {
   void SetUp() override {
     const Integrator integrator(IntegratorConfig{});
     for (int n = 0; n < 3; ++n) {
-      const Eigen::Isometry3d T_W_C = synthetic::cameraPose(synthetic::Motion::kDesk, n * 0.5, 10.0);
-      const DepthImage depth = test::renderRoom(T_W_C, camera);
-      integrator.integrate(depth, camera, T_W_C, &dense);
-      integrator.integrate(depth, camera, T_W_C, &sparse);
+      poses.push_back(synthetic::cameraPose(synthetic::Motion::kDesk, n * 0.5, 10.0));
+      const DepthImage depth = test::renderRoom(poses.back(), camera);
+      integrator.integrate(depth, camera, poses.back(), &dense);
+      integrator.integrate(depth, camera, poses.back(), &sparse);
     }
   }
+  /// Whether voxel (i, j, k) projects within 1e-3 pixels of a pixel border in some frame: there the
+  /// float rounding of either storage's voxel positions may pick the neighbouring pixel.
+  bool nearPixelBorder(int i, int j, int k) const {
+    const Eigen::Vector3d p_W = dense.config().origin_W + dense.config().voxel_size_m * Eigen::Vector3d(i, j, k);
+    for (const Eigen::Isometry3d& T_W_C : poses) {
+      const Eigen::Vector3d p_C = T_W_C.inverse() * p_W;
+      for (const double pixel : {camera.fx * p_C.x() / p_C.z() + camera.cx + 0.5,
+                                 camera.fy * p_C.y() / p_C.z() + camera.cy + 0.5}) {
+        if (std::fabs(pixel - std::round(pixel)) < 1e-3) return true;
+      }
+    }
+    return false;
+  }
   PinholeCamera camera = test::testCamera();
+  std::vector<Eigen::Isometry3d> poses;
   TsdfVolume dense{test::roomVolume()};
   SparseTsdfMap sparse{sparseRoom()};
 };
 
 TEST_F(FusionFixture, FusedVoxelsEqualTheDenseGridsAndCoverItsTruncationBand) {
+  constexpr float kSameValue_m = 1e-4f;  // a tenth of a millimetre
   const Eigen::Vector3i dims = dense.dims();
-  size_t band = 0, covered = 0, same_history = 0, same_value = 0, sparse_only = 0;
+  size_t band = 0, covered = 0, same_history = 0, comparable = 0, same_value = 0, sparse_only = 0;
   for (int k = 0; k < dims.z(); ++k)
     for (int j = 0; j < dims.y(); ++j)
       for (int i = 0; i < dims.x(); ++i) {
         const Voxel d = dense.voxel(i, j, k);
         const Voxel s = sparse.voxel({i, j, k});
         sparse_only += s.weight > 0.0f && d.weight <= 0.0f;  // only where rounding moved a voxel into the image
-        // Fused from the same frames (weights count them): the same value, unless rounding put
-        // the voxel's centre on the other side of a pixel border in one of them.
-        const bool same_frames = s.weight > 0.0f && s.weight == d.weight;
-        same_value += same_frames && std::fabs(d.distance_m - s.distance_m) < 1e-5f;
         if (d.weight > 0.0f && d.distance_m < dense.positiveTruncation()) {
           ++band;
           covered += s.weight > 0.0f;
+          // Fused from the same frames (weights count them): the same value, unless rounding put
+          // the voxel's centre on the other side of a pixel border in one of them. The dense grid
+          // steps along its rows by adding one voxel at a time, which moves centres by up to
+          // ~1e-5 m at the far end of a 256-voxel row.
           same_history += d.weight == s.weight;
+          if (d.weight == s.weight && !nearPixelBorder(i, j, k)) {
+            ++comparable;
+            same_value += std::fabs(d.distance_m - s.distance_m) < kSameValue_m;
+          }
         }
       }
   EXPECT_GT(band, 100000u);
   // Only depth edges narrower than the allocation's ray spacing may miss a block in some frame.
   EXPECT_GE(static_cast<double>(covered), 0.999 * band) << covered << " of " << band << " voxels in the band";
   EXPECT_GE(static_cast<double>(same_history), 0.995 * band) << same_history << " of " << band;
-  EXPECT_GE(static_cast<double>(same_value), 0.999 * same_history) << same_value << " of " << same_history;
+  EXPECT_GT(static_cast<double>(comparable), 0.8 * band);
+  EXPECT_GE(static_cast<double>(same_value), 0.999 * comparable) << same_value << " of " << comparable;
   EXPECT_LE(static_cast<double>(sparse_only), 1e-4 * band) << sparse_only << " voxels observed by the sparse map alone";
   EXPECT_LT(sparse.memoryBytes(), dense.memoryBytes() / 2) << "memory follows the surface, not the extent";
 }
