@@ -38,7 +38,7 @@ for test in test_core test_tools; do
     status=1
   fi
 done
-for target in depth_png vti ply tum_folder; do
+for target in depth_png vti sdfmap ply tum_folder; do
   echo "sanitizers: fuzzing $target for $seconds s"
   if "$build/fuzz_$target" "$repo/test/fuzz/corpus/$target" "$seconds" 1 > "$build/fuzz_$target.log" 2>&1; then
     tail -n 1 "$build/fuzz_$target.log"

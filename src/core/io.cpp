@@ -60,6 +60,23 @@ void writeBinary(std::ostream& out, const T& value) {
   out.write(reinterpret_cast<const char*>(&value), sizeof(T));
 }
 
+/// 64-bit FNV-1a, fed in pieces.
+class Fnv1a {
+ public:
+  void add(const void* data, size_t bytes) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < bytes; ++i) hash_ = (hash_ ^ p[i]) * 0x100000001b3ull;
+  }
+  uint64_t value() const { return hash_; }
+
+ private:
+  uint64_t hash_ = 0xcbf29ce484222325ull;
+};
+
+bool hasExtension(const std::string& path, const std::string& extension) {
+  return path.size() > extension.size() && path.compare(path.size() - extension.size(), extension.size(), extension) == 0;
+}
+
 void writeVector3(std::ostream& out, const Eigen::Vector3f& v) {
   writeBinary(out, v.x());
   writeBinary(out, v.y());
@@ -397,6 +414,154 @@ TsdfVolume readVti(const std::string& path, bool compact_voxels) {
   } catch (const std::bad_alloc&) {
     fail(path, "not enough memory for its " + std::to_string(voxel_count) + " voxels");
   }
+}
+
+namespace {
+
+constexpr char kMapMagic[8] = {'S', 'D', 'F', 'T', 'M', 'A', 'P', '\n'};
+constexpr uint32_t kMapVersion = 1;
+
+/// The header of a .sdfmap file, field by field as stored.
+#pragma pack(push, 1)
+struct MapFileHeader {
+  char magic[8];
+  uint32_t version;
+  uint32_t block_side;
+  double voxel_size_m;
+  double positive_truncation_m;
+  double origin_W[3];
+  uint64_t block_count;
+};
+struct MapFileBlock {
+  int32_t index[3];
+  Voxel voxels[kBlockVoxels];
+};
+#pragma pack(pop)
+static_assert(sizeof(MapFileHeader) == 64 && sizeof(Voxel) == 8, "the .sdfmap layout is fixed");
+
+}  // namespace
+
+void writeSparseMap(const std::string& path, const SparseTsdfMap& map) {
+  MapFileHeader header;
+  std::memcpy(header.magic, kMapMagic, sizeof(kMapMagic));
+  header.version = kMapVersion;
+  header.block_side = kBlockSide;
+  header.voxel_size_m = map.config().voxel_size_m;
+  header.positive_truncation_m = map.config().positive_truncation_m;
+  for (int axis = 0; axis < 3; ++axis) header.origin_W[axis] = map.config().origin_W[axis];
+  const std::vector<SparseTsdfMap::BlockIndex> indices = map.blockIndices();
+  header.block_count = indices.size();
+
+  AtomicOutput out(path);
+  Fnv1a hash;
+  auto put = [&](const void* data, size_t bytes) {
+    hash.add(data, bytes);
+    out.stream().write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
+  };
+  put(&header, sizeof(header));
+  auto record = std::make_unique<MapFileBlock>();
+  for (const SparseTsdfMap::BlockIndex& index : indices) {
+    for (int axis = 0; axis < 3; ++axis) record->index[axis] = index[axis];
+    const VoxelBlock& block = *map.find(index);
+    std::copy(block.voxels.begin(), block.voxels.end(), record->voxels);
+    put(record.get(), sizeof(MapFileBlock));
+  }
+  const uint64_t checksum = hash.value();
+  out.stream().write(reinterpret_cast<const char*>(&checksum), sizeof(checksum));
+  out.commit();
+}
+
+SparseTsdfMap readSparseMap(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
+  in.seekg(0, std::ios::end);
+  const uint64_t file_bytes = static_cast<uint64_t>(in.tellg());
+  in.seekg(0);
+  MapFileHeader header;
+  if (file_bytes < sizeof(header) || !in.read(reinterpret_cast<char*>(&header), sizeof(header)) ||
+      std::memcmp(header.magic, kMapMagic, sizeof(kMapMagic)) != 0) {
+    fail(path, "not an sdf_tracker map (.sdfmap) file");
+  }
+  if (header.version != kMapVersion) {
+    fail(path, "format version " + std::to_string(header.version) + "; this build reads version " +
+                   std::to_string(kMapVersion));
+  }
+  if (header.block_side != static_cast<uint32_t>(kBlockSide)) {
+    fail(path, "blocks of " + std::to_string(header.block_side) + "^3 voxels; this build uses " +
+                   std::to_string(kBlockSide) + "^3");
+  }
+  VolumeConfig config;
+  config.type = MapType::kSparse;
+  config.voxel_size_m = header.voxel_size_m;
+  config.positive_truncation_m = header.positive_truncation_m;
+  config.origin_W = Eigen::Vector3d(header.origin_W[0], header.origin_W[1], header.origin_W[2]);
+  if (const auto violations = config.validate(); !violations.empty()) {
+    fail(path, "invalid map geometry: " + violations.front());
+  }
+  // The length must match the block count exactly before anything is allocated for the blocks.
+  const uint64_t block_bytes = sizeof(MapFileBlock);
+  const uint64_t payload = file_bytes - sizeof(header);
+  if (payload < sizeof(uint64_t) || (payload - sizeof(uint64_t)) / block_bytes != header.block_count ||
+      (payload - sizeof(uint64_t)) % block_bytes != 0) {
+    fail(path, "its header lists " + std::to_string(header.block_count) + " blocks (" +
+                   std::to_string(header.block_count * block_bytes + sizeof(uint64_t)) +
+                   " bytes after the header) but the file holds " + std::to_string(payload) +
+                   " bytes after the header: truncated or not written by this package");
+  }
+
+  Fnv1a hash;
+  hash.add(&header, sizeof(header));
+  SparseTsdfMap map(config);
+  auto record = std::make_unique<MapFileBlock>();
+  try {
+    for (uint64_t b = 0; b < header.block_count; ++b) {
+      if (!in.read(reinterpret_cast<char*>(record.get()), sizeof(MapFileBlock))) {
+        fail(path, "read failed in block " + std::to_string(b));
+      }
+      hash.add(record.get(), sizeof(MapFileBlock));
+      const SparseTsdfMap::BlockIndex index(record->index[0], record->index[1], record->index[2]);
+      std::ostringstream where;
+      where << "block " << b << " at (" << index.transpose() << ")";
+      if (!SparseTsdfMap::inKeyRange(index)) fail(path, where.str() + " lies beyond the map's reach");
+      if (map.find(index)) fail(path, where.str() + " appears twice");
+      for (int v = 0; v < kBlockVoxels; ++v) {
+        const Voxel& voxel = record->voxels[v];
+        if (!std::isfinite(voxel.distance_m)) {
+          fail(path, where.str() + ", voxel " + std::to_string(v) + ": invalid distance " +
+                         std::to_string(voxel.distance_m));
+        }
+        if (!std::isfinite(voxel.weight) || voxel.weight < 0.0f) {
+          fail(path, where.str() + ", voxel " + std::to_string(v) + ": invalid weight " +
+                         std::to_string(voxel.weight) + " (must be finite and at least 0)");
+        }
+      }
+      std::copy(record->voxels, record->voxels + kBlockVoxels, map.allocate(index).voxels.begin());
+    }
+  } catch (const std::bad_alloc&) {
+    fail(path, "not enough memory for its " + std::to_string(header.block_count) + " blocks");
+  }
+  uint64_t checksum = 0;
+  if (!in.read(reinterpret_cast<char*>(&checksum), sizeof(checksum)) || checksum != hash.value()) {
+    fail(path, "checksum mismatch: the file is corrupt");
+  }
+  return map;
+}
+
+void writeMap(const std::string& path, const TsdfMap& map) {
+  if (hasExtension(path, ".sdfmap")) {
+    if (map.type() == MapType::kSparse) writeSparseMap(path, static_cast<const SparseTsdfMap&>(map));
+    else writeSparseMap(path, toSparseMap(map));
+  } else if (hasExtension(path, ".vti")) {
+    writeVti(path, toDenseVolume(map));
+  } else {
+    fail(path, "unknown map file extension (known: .sdfmap, .vti)");
+  }
+}
+
+std::unique_ptr<TsdfMap> readMap(const std::string& path, bool compact_voxels) {
+  if (hasExtension(path, ".sdfmap")) return std::make_unique<SparseTsdfMap>(readSparseMap(path));
+  if (hasExtension(path, ".vti")) return std::make_unique<TsdfVolume>(readVti(path, compact_voxels));
+  fail(path, "unknown map file extension (known: .sdfmap, .vti)");
 }
 
 void writeTrajectory(const std::string& path, const std::vector<StampedPose>& poses) {

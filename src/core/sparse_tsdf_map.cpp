@@ -9,8 +9,6 @@
 
 namespace sdf_tracker {
 
-bool SparseTsdfMap::inKeyRange(const BlockIndex& block) { return block.cwiseAbs().maxCoeff() <= kMaxBlock; }
-
 SparseTsdfMap::SparseTsdfMap(const VolumeConfig& config) : TsdfMap(config, MapType::kSparse) {}
 
 SparseTsdfMap::SparseTsdfMap(const SparseTsdfMap& other)
@@ -173,6 +171,35 @@ TsdfVolume toDenseVolume(const TsdfMap& map) {
   sparse.bounds(&first, &dims);
   if (dims.minCoeff() < 2) throw std::invalid_argument("the sparse map holds no block to export");
   return sparse.toDense(first, dims);
+}
+
+SparseTsdfMap toSparseMap(const TsdfMap& map) {
+  if (map.type() == MapType::kSparse) return static_cast<const SparseTsdfMap&>(map);
+  const auto& dense = static_cast<const TsdfVolume&>(map);
+  SparseTsdfMap sparse(dense.config());
+  const Eigen::Vector3i dims = dense.dims();
+  const SparseTsdfMap::BlockIndex last = SparseTsdfMap::blockOf(dims - Eigen::Vector3i::Ones());
+  for (int bz = 0; bz <= last.z(); ++bz) {
+    for (int by = 0; by <= last.y(); ++by) {
+      for (int bx = 0; bx <= last.x(); ++bx) {
+        const SparseTsdfMap::BlockIndex index(bx, by, bz);
+        const Eigen::Vector3i first = SparseTsdfMap::firstVoxel(index);
+        const Eigen::Vector3i end = (first + Eigen::Vector3i::Constant(kBlockSide)).cwiseMin(dims);
+        VoxelBlock* block = nullptr;
+        for (int k = first.z(); k < end.z(); ++k) {
+          for (int j = first.y(); j < end.y(); ++j) {
+            for (int i = first.x(); i < end.x(); ++i) {
+              const Voxel v = dense.voxel(i, j, k);
+              if (v.weight <= 0.0f) continue;
+              if (!block) block = &sparse.allocate(index);
+              block->voxels[VoxelBlock::index(SparseTsdfMap::localOf({i, j, k}))] = v;
+            }
+          }
+        }
+      }
+    }
+  }
+  return sparse;
 }
 
 }  // namespace sdf_tracker

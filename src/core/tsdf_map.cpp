@@ -1,5 +1,6 @@
 #include "sdf_tracker/core/tsdf_map.h"
 
+#include <atomic>
 #include <sstream>
 #include <utility>
 
@@ -52,6 +53,8 @@ std::string VolumeConfig::describe() const {
 }
 
 TsdfMap::TsdfMap(VolumeConfig config, MapType type) : config_(std::move(config)) {
+  static std::atomic<uint64_t> next_identity{1};
+  identity_ = next_identity++;
   config_.type = type;
   throwIfInvalid("volume config", config_.validate());
   voxel_size_ = static_cast<float>(config_.voxel_size_m);

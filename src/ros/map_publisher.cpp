@@ -31,7 +31,7 @@ MapSnapshot::MapSnapshot(std::mutex& map_mutex, std::function<const st::TsdfMap*
 
 bool MapSnapshot::copyAllIfStale(const st::TsdfMap& live) {
   const bool sparse = live.type() == st::MapType::kSparse;
-  const bool stale = !copy_ || !copy_->config().sameGrid(live.config()) ||
+  const bool stale = !copy_ || copy_->identity() != live.identity() ||
                      (sparse && static_cast<const st::SparseTsdfMap&>(live).clearedAt() > synced_revision_);
   if (!stale) return false;
   copy_ = live.clone();

@@ -97,9 +97,9 @@ bool MapServices::saveVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
   return answer(res, [&] {
     const std::string path = outputPath(req.path, "sdf_volume.vti");
     std::vector<st::io::StampedPose> trajectory;
-    st::io::writeVti(path, st::toDenseVolume(*copyMap(&trajectory)));
+    st::io::writeMap(path, *copyMap(&trajectory));
     writeTrajectory(trajectory);
-    return "wrote the volume to " + path;
+    return "wrote the map to " + path;
   });
 }
 
@@ -111,9 +111,9 @@ bool MapServices::loadVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
       std::lock_guard<std::mutex> lock(state_.mutex);
       compact = state_.pipeline->config().volume.compact_voxels;
     }
-    st::TsdfVolume loaded = st::io::readVti(path, compact);  // read before taking the lock
+    std::unique_ptr<st::TsdfMap> loaded = st::io::readMap(path, compact);  // read before taking the lock
     std::lock_guard<std::mutex> lock(state_.mutex);
-    state_.pipeline->setMap(std::make_unique<st::TsdfVolume>(std::move(loaded)));
+    state_.pipeline->setMap(std::move(loaded));
     state_.trajectory.clear();
     state_.restarted = true;
     return "tracking against " + path;

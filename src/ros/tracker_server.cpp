@@ -42,11 +42,9 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
   camera_settings_ = settings.camera;
   state_.pipeline = std::make_unique<st::SdfPipeline>(settings.pipeline);
   if (options_.load_volume != "none" && !options_.load_volume.empty()) {
-    state_.pipeline->setMap(std::make_unique<st::TsdfVolume>(
-        st::io::readVti(options_.load_volume, settings.pipeline.volume.compact_voxels)));
-    const auto& v = state_.pipeline->config().volume;
-    ROS_INFO("sdf_tracker: tracking against the map in %s (its grid: %dx%dx%d of %g m)", options_.load_volume.c_str(),
-             v.dims.x(), v.dims.y(), v.dims.z(), v.voxel_size_m);
+    state_.pipeline->setMap(st::io::readMap(options_.load_volume, settings.pipeline.volume.compact_voxels));
+    ROS_INFO("sdf_tracker: tracking against the map in %s (%s)", options_.load_volume.c_str(),
+             state_.pipeline->config().volume.describe().c_str());
   }
 
   poses_ = std::make_unique<PoseBroadcaster>(nh_, pnh_, options_);

@@ -49,7 +49,9 @@ Tracks a depth camera through a TUM-layout sequence and reconstructs the scene.
   --distortion K1,K2,P1,P2,K3  the lens distortion (plumb bob) to remove from every image;
                         0,0,0,0,0 for none (default: intrinsics.txt's last five columns,
                         else TUM's published one when the intrinsics are TUM freiburg1/2's)
-  --load-volume FILE    track against a saved .vti map instead of starting empty
+  --load-volume FILE    track against a saved map instead of starting empty: a .sdfmap
+                        (--save-map; loads sparse) or a .vti (--save-volume; loads dense)
+  --save-map            also write the map as map.sdfmap (every block, exactly; reloadable)
   --save-volume         also write the map as sdf_volume.vti (ParaView) and triangles.obj
   --raycast             also ray-cast the virtual depth view every frame (as the node's
                         image_denoised) and time it
@@ -101,7 +103,7 @@ int run(int argc, char** argv) {
       argc, argv,
       {"sequence", "output", "preset", "param", "frames", "threads", "depth-factor", "intrinsics", "distortion",
        "load-volume"},
-      {"save-volume", "raycast", "quiet", "list-params", "help"});
+      {"save-map", "save-volume", "raycast", "quiet", "list-params", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
     return 0;
@@ -160,7 +162,7 @@ int run(int argc, char** argv) {
   }
   const std::vector<std::string> summaries = {"summary.txt", "summary.json"};
   st::tools::OutputFolder output(output_dir, {"trajectory.txt", "frames.csv", "mesh.ply", "cloud.ply", "sdf_volume.vti",
-                                              "triangles.obj", "trajectory.png", "summary.txt", "summary.json"});
+                                              "map.sdfmap", "triangles.obj", "trajectory.png", "summary.txt", "summary.json"});
   const st::PinholeCamera& camera = sequence.camera();
   std::cout << "sequence " << sequence_dir << ": " << sequence.size() << " frames, " << camera.width << "x"
             << camera.height << ", fx " << camera.fx << " fy " << camera.fy << " cx " << camera.cx << " cy "
@@ -169,8 +171,7 @@ int run(int argc, char** argv) {
   std::cout << camera.distortion.summary(sequence.distortionSource()) << "\n";
   st::SdfPipeline pipeline(settings.pipeline);
   if (args.has("load-volume")) {
-    pipeline.setMap(std::make_unique<st::TsdfVolume>(
-        st::io::readVti(args.get("load-volume"), settings.pipeline.volume.compact_voxels)));
+    pipeline.setMap(st::io::readMap(args.get("load-volume"), settings.pipeline.volume.compact_voxels));
     // The file's grid replaces the configured one: the rules between parameters must hold for it.
     st::throwIfInvalid("parameters with the grid of " + args.get("load-volume"),
                        st::Settings{pipeline.config(), settings.camera}.validate());
@@ -225,6 +226,7 @@ int run(int argc, char** argv) {
   const st::TriangleMesh mesh = st::extractMesh(pipeline.map());
   st::io::writePly(output.path("mesh.ply"), mesh);
   st::io::writePly(output.path("cloud.ply"), st::extractSurfaceCloud(pipeline.map()));
+  if (args.has("save-map")) st::io::writeMap(output.path("map.sdfmap"), pipeline.map());
   if (args.has("save-volume")) {
     st::io::writeVti(output.path("sdf_volume.vti"), st::toDenseVolume(pipeline.map()));
     st::io::writeObj(output.path("triangles.obj"), mesh);

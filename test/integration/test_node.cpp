@@ -218,6 +218,41 @@ TEST_F(NodeTest, SaveMeshWritesAPlyThatLoadsBack) {
   EXPECT_GT(mesh.triangles.size(), 1000u);
 }
 
+TEST_F(NodeTest, AMapSavedBySaveVolumeIsTrackedInAfterLoadVolume) {
+  const st::PinholeCamera camera = st::PinholeCamera::tumFreiburg1().scaledTo(320, 240);
+  st::synthetic::NoiseModel exact;
+  exact.enabled = false;
+  auto frameAt = [&](double stamp_s, double t_s) {
+    std_msgs::Header header;
+    header.stamp = ros::Time(stamp_s);
+    header.frame_id = "camera_depth_optical_frame";
+    const auto T = st::synthetic::cameraPose(st::synthetic::Motion::kDesk, t_s, 10.0);
+    return sdf_tracker_ros::toImageMsg(st::synthetic::Scene::indoorRoom().render(camera, T, exact, 0), header);
+  };
+  ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
+  for (int i = 0; i < 3; ++i) publishAndWait(frameAt(500.0 + i / 30.0, i / 30.0), camera);
+  sdf_tracker::SavePath save;
+  save.request.path = "/tmp/sdf_tracker_node_test_map.sdfmap";
+  ASSERT_TRUE(ros::service::call("sdf_tracker/save_volume", save));
+  ASSERT_TRUE(save.response.success) << save.response.message;
+  EXPECT_GT(st::io::readSparseMap(save.request.path).blockCount(), 100u) << "the dense grid is saved as its blocks";
+
+  ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
+  sdf_tracker::SavePath load;
+  load.request.path = save.request.path;
+  ASSERT_TRUE(ros::service::call("sdf_tracker/load_volume", load));
+  ASSERT_TRUE(load.response.success) << load.response.message;
+  const auto in_loaded = publishAndWait(frameAt(510.0, 1 / 30.0), camera);
+  EXPECT_EQ(in_loaded.status, sdf_tracker::TrackingStatus::OK) << in_loaded.status_text;
+  EXPECT_EQ(in_loaded.status_text.find("first frame"), std::string::npos)
+      << "the frame is tracked in the loaded map, not used to start a new one: " << in_loaded.status_text;
+
+  load.request.path = "/tmp/sdf_tracker_node_test_missing.sdfmap";
+  ASSERT_TRUE(ros::service::call("sdf_tracker/load_volume", load));
+  EXPECT_FALSE(load.response.success);
+  EXPECT_NE(load.response.message.find(load.request.path), std::string::npos) << load.response.message;
+}
+
 TEST_F(NodeTest, AFrameFromThePastIsDroppedWithoutWipingTheMap) {
   const st::PinholeCamera camera = st::PinholeCamera::tumFreiburg1().scaledTo(320, 240);
   st::synthetic::NoiseModel exact;

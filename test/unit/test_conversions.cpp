@@ -2,6 +2,8 @@
 
 #include <limits>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <set>
 
 #include <cmath>
@@ -11,7 +13,9 @@
 
 #include "sdf_tracker/SdfTrackerConfig.h"
 #include "sdf_tracker/core/parameters.h"
+#include "sdf_tracker/core/sparse_tsdf_map.h"
 #include "sdf_tracker/ros/conversions.h"
+#include "sdf_tracker/ros/map_publisher.h"
 #include "sdf_tracker/ros/parameters.h"
 #include "sdf_tracker/ros/pose_broadcaster.h"
 
@@ -202,6 +206,26 @@ TEST(Frames, LeadingSlashesAreStripped) {
   EXPECT_EQ(stripSlash("//map"), "map");
   EXPECT_EQ(stripSlash("base_link"), "base_link");
   EXPECT_EQ(stripSlash("/"), "");
+}
+
+TEST(MapSnapshot, FollowsChangedBlocksAndNoticesAMapReplacedByAnotherOfTheSameGrid) {
+  sdf_tracker::VolumeConfig config;
+  config.type = sdf_tracker::MapType::kSparse;
+  std::mutex mutex;
+  std::unique_ptr<sdf_tracker::SparseTsdfMap> live = std::make_unique<sdf_tracker::SparseTsdfMap>(config);
+  MapSnapshot snapshot(mutex, [&live] { return live.get(); });
+  auto blocksOf = [](const sdf_tracker::TsdfMap* map) {
+    return static_cast<const sdf_tracker::SparseTsdfMap&>(*map).blockIndices();
+  };
+  const sdf_tracker::SparseTsdfMap::BlockIndex a(0, 0, 0), b(5, -1, 2);
+  EXPECT_TRUE(blocksOf(snapshot.update()).empty());
+  live->allocate(a).changed_at = live->beginRevision();
+  EXPECT_EQ(blocksOf(snapshot.update()), std::vector<sdf_tracker::SparseTsdfMap::BlockIndex>{a});
+  // A map of the same grid and revision loaded in its place (as ~load_volume does).
+  auto loaded = std::make_unique<sdf_tracker::SparseTsdfMap>(config);
+  loaded->allocate(b).changed_at = loaded->beginRevision();
+  live = std::move(loaded);
+  EXPECT_EQ(blocksOf(snapshot.update()), std::vector<sdf_tracker::SparseTsdfMap::BlockIndex>{b});
 }
 
 }  // namespace

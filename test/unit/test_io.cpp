@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -136,6 +137,111 @@ TEST(Io, CorruptVtiIsRejected) {
   EXPECT_THROW(io::readVti(dir + "/spacing.vti"), std::runtime_error);
   writeFile(dir + "/garbage.vti", "hello");
   EXPECT_THROW(io::readVti(dir + "/garbage.vti"), std::runtime_error);
+}
+
+/// A sparse map with blocks on both sides of the origin, each voxel's value its own.
+SparseTsdfMap patternedSparseMap() {
+  VolumeConfig config;
+  config.type = MapType::kSparse;
+  config.voxel_size_m = 0.02;
+  config.origin_W = Eigen::Vector3d(0.1, -0.2, 0.3);
+  config.positive_truncation_m = 0.08;
+  SparseTsdfMap map(config);
+  for (const SparseTsdfMap::BlockIndex& index : {SparseTsdfMap::BlockIndex(0, 0, 0), SparseTsdfMap::BlockIndex(-3, 5, -1),
+                                                 SparseTsdfMap::BlockIndex(1000, -2000, 7)}) {
+    VoxelBlock& block = map.allocate(index);
+    for (int v = 0; v < kBlockVoxels; ++v) {
+      block.voxels[v] = Voxel{0.08f * std::sin(0.37f * v + index.x()), static_cast<float>(v % 5)};
+    }
+  }
+  return map;
+}
+
+std::string readBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+/// The message readSparseMap gives for these bytes ("" when it loads them).
+std::string sparseMapError(const std::string& dir, const std::string& bytes) {
+  writeFile(dir + "/edited.sdfmap", bytes);
+  try {
+    io::readSparseMap(dir + "/edited.sdfmap");
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Io, SparseMapRoundTripsEveryBlockExactly) {
+  const std::string dir = test::scratchDirectory("sdfmap");
+  const SparseTsdfMap map = patternedSparseMap();
+  io::writeMap(dir + "/map.sdfmap", map);
+  EXPECT_FALSE(io::removeStaleTemporary(dir + "/map.sdfmap")) << "no temporary file is left behind";
+  const std::unique_ptr<TsdfMap> loaded = io::readMap(dir + "/map.sdfmap");
+  ASSERT_EQ(loaded->type(), MapType::kSparse);
+  const auto& sparse = static_cast<const SparseTsdfMap&>(*loaded);
+  EXPECT_TRUE(sparse.config().sameLattice(map.config()));
+  ASSERT_EQ(sparse.blockIndices(), map.blockIndices());
+  for (const SparseTsdfMap::BlockIndex& index : map.blockIndices()) {
+    const VoxelBlock& a = *map.find(index);
+    const VoxelBlock& b = *sparse.find(index);
+    for (int v = 0; v < kBlockVoxels; ++v) {
+      ASSERT_EQ(a.voxels[v].distance_m, b.voxels[v].distance_m) << index.transpose() << " voxel " << v;
+      ASSERT_EQ(a.voxels[v].weight, b.voxels[v].weight) << index.transpose() << " voxel " << v;
+    }
+  }
+}
+
+TEST(Io, ADenseGridSavedAsASparseMapKeepsEveryObservedVoxel) {
+  const std::string dir = test::scratchDirectory("sdfmap_dense");
+  TsdfVolume volume = sphereVolume();
+  for (int k = 0; k < 40; ++k)  // leave part of the grid unobserved: it must stay so
+    for (int j = 0; j < 40; ++j)
+      for (int i = 0; i < 12; ++i) volume.setVoxel(i, j, k, Voxel{volume.positiveTruncation(), 0.0f});
+  io::writeMap(dir + "/sphere.sdfmap", volume);
+  const SparseTsdfMap sparse = io::readSparseMap(dir + "/sphere.sdfmap");
+  EXPECT_EQ(sparse.blockCount(), 4u * 5u * 5u) << "blocks wholly unobserved are not stored";
+  for (int k = 0; k < 40; ++k) {
+    for (int j = 0; j < 40; ++j) {
+      for (int i = 0; i < 40; ++i) {
+        const Voxel a = volume.voxel(i, j, k), b = sparse.voxel({i, j, k});
+        ASSERT_EQ(a.weight, b.weight) << i << " " << j << " " << k;
+        if (a.weight > 0.0f) {
+          ASSERT_EQ(a.distance_m, b.distance_m) << i << " " << j << " " << k;
+        }
+      }
+    }
+  }
+}
+
+TEST(Io, CorruptSparseMapsAreRefusedSayingWhatIsWrong) {
+  const std::string dir = test::scratchDirectory("sdfmap_bad");
+  io::writeSparseMap(dir + "/good.sdfmap", patternedSparseMap());
+  const std::string good = readBytes(dir + "/good.sdfmap");
+  ASSERT_EQ(sparseMapError(dir, good), "");
+  auto has = [](const std::string& message, const std::string& part) {
+    return message.find(part) != std::string::npos;
+  };
+  EXPECT_TRUE(has(sparseMapError(dir, good.substr(0, good.size() - 100)), "truncated"));
+  EXPECT_TRUE(has(sparseMapError(dir, good + "x"), "truncated"));
+  EXPECT_TRUE(has(sparseMapError(dir, "hello"), "not an sdf_tracker map"));
+  std::string version = good;
+  version[8] = 2;
+  EXPECT_TRUE(has(sparseMapError(dir, version), "format version 2"));
+  std::string flipped = good;
+  flipped[64 + 12 + 1000] ^= 0x01;  // one bit of a voxel of the first block
+  EXPECT_TRUE(has(sparseMapError(dir, flipped), "checksum"));
+  std::string not_a_number = good;
+  const float nan = std::nanf("");
+  not_a_number.replace(64 + 12 + 8 * 5, sizeof(float), reinterpret_cast<const char*>(&nan), sizeof(float));
+  EXPECT_TRUE(has(sparseMapError(dir, not_a_number), "voxel 5: invalid distance nan"));
+  std::string huge_count = good;
+  const uint64_t count = 1ull << 40;
+  huge_count.replace(56, sizeof(count), reinterpret_cast<const char*>(&count), sizeof(count));
+  EXPECT_TRUE(has(sparseMapError(dir, huge_count), "lists 1099511627776 blocks"));
+  EXPECT_THROW(io::readMap(dir + "/good.map"), std::runtime_error) << "unknown extension";
+  EXPECT_THROW(io::writeMap(dir + "/out.bin", patternedSparseMap()), std::runtime_error) << "unknown extension";
 }
 
 TEST(Io, TrajectoryRoundTripsAndBadLinesAreNamed) {

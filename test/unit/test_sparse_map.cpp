@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 
 #include "sdf_tracker/core/integrator.h"
+#include "sdf_tracker/core/io.h"
 #include "sdf_tracker/core/parameters.h"
 #include "sdf_tracker/core/pipeline.h"
 #include "sdf_tracker/core/sparse_tsdf_map.h"
@@ -230,6 +232,45 @@ TEST(SparseMap, TracksTheDeskPathAsTheDenseGridDoes) {
   }
   EXPECT_LT(worst_m, 1e-3) << "trajectories of the two storages part by " << worst_m << " m";
   EXPECT_LT(sparse.map().memoryBytes(), dense.map().memoryBytes() / 4);
+}
+
+TEST(SparseMap, ASavedMapIsTrackedAfterLoadingAsBeforeSaving) {
+  const PinholeCamera camera = test::testCamera();
+  Settings settings = preset("default");
+  setParameter(&settings, "MapType", std::string("sparse"));
+  SdfPipeline mapper(settings.pipeline);
+  synthetic::NoiseModel kinect;
+  const synthetic::Scene room = synthetic::Scene::indoorRoom();
+  auto frame = [&](int i) {
+    return room.render(camera, synthetic::cameraPose(synthetic::Motion::kDesk, i / 30.0, 10.0), kinect,
+                       static_cast<uint32_t>(i));
+  };
+  // The pipeline's world is the first camera's frame.
+  const Eigen::Isometry3d T_scene_W = synthetic::cameraPose(synthetic::Motion::kDesk, 0.0, 10.0);
+  auto truth = [&](int i) { return T_scene_W.inverse() * synthetic::cameraPose(synthetic::Motion::kDesk, i / 30.0, 10.0); };
+  double mapping_worst_m = 0.0;
+  for (int i = 0; i < 45; ++i) {
+    ASSERT_TRUE(mapper.processFrame(frame(i), camera, i / 30.0).track.tracked()) << "frame " << i;
+    mapping_worst_m = std::max(mapping_worst_m, (mapper.pose().translation() - truth(i).translation()).norm());
+  }
+  const std::string path = test::scratchDirectory("tracked_map") + "/map.sdfmap";
+  io::writeMap(path, mapper.map());
+
+  // A new session (dense by its settings) loads the file and tracks the same frames in it, from
+  // the map's origin: the first camera's pose.
+  SdfPipeline session(preset("default").pipeline);
+  session.setMap(io::readMap(path));
+  EXPECT_EQ(session.map().type(), MapType::kSparse) << "the file's storage replaces the configured one";
+  EXPECT_EQ(session.map().memoryBytes(), mapper.map().memoryBytes());
+  double worst_m = 0.0;
+  for (int i = 0; i < 45; i += 3) {
+    const FrameReport report = session.processFrame(frame(i), camera, i / 30.0);
+    ASSERT_TRUE(report.track.tracked()) << "frame " << i << ": " << report.track.message;
+    worst_m = std::max(worst_m, (session.pose().translation() - truth(i).translation()).norm());
+  }
+  std::cout << "error against the truth: " << mapping_worst_m * 1e3 << " mm while mapping, " << worst_m * 1e3
+            << " mm in the loaded map\n";
+  EXPECT_LT(worst_m, mapping_worst_m + 1e-3) << "tracking in the loaded map is worse than while mapping";
 }
 
 TEST(HouseWalk, WalksAtHalfAMetrePerSecondInsideTheHouseAndAlwaysSeesIt) {

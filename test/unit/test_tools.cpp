@@ -150,6 +150,28 @@ TEST(Offline, ARunInWhichNoFrameCouldBeTrackedFails) {
   EXPECT_NE(run.output.find("no frame could be tracked"), std::string::npos) << run.output;
 }
 
+TEST(Offline, ASavedMapIsLoadedByTheNextRunAndACorruptOneIsRefusedByName) {
+  const std::string sequence = shortSequence(6);
+  const std::string first = test::scratchDirectory("save_map");
+  const ToolRun mapping =
+      offline("--sequence " + sequence + " --output " + first + " --save-map --param MapType=sparse");
+  ASSERT_EQ(mapping.exit_code, 0) << mapping.output;
+  ASSERT_TRUE(fs::exists(first + "/map.sdfmap"));
+  const ToolRun reuse = offline("--sequence " + sequence + " --output " + test::scratchDirectory("load_map") +
+                                " --load-volume " + first + "/map.sdfmap");
+  EXPECT_EQ(reuse.exit_code, 0) << reuse.output;
+  EXPECT_NE(reuse.output.find("sparse map of 0.02 m voxels"), std::string::npos)
+      << "the file's storage replaces the configured dense grid:\n" << reuse.output;
+  EXPECT_NE(reuse.output.find("tracked ok 6"), std::string::npos) << "the first frame too is tracked in it:\n"
+                                                                  << reuse.output;
+
+  fs::resize_file(first + "/map.sdfmap", fs::file_size(first + "/map.sdfmap") - 10);
+  const ToolRun corrupt = offline("--sequence " + sequence + " --output " + test::scratchDirectory("bad_map") +
+                                  " --load-volume " + first + "/map.sdfmap");
+  EXPECT_EQ(corrupt.exit_code, 1) << corrupt.output;
+  EXPECT_NE(corrupt.output.find(first + "/map.sdfmap: its header lists"), std::string::npos) << corrupt.output;
+}
+
 TEST(Offline, TheJsonSummaryIsValidJsonEvenForAPathWithATab) {
   const std::string sequence = shortSequence(3);
   const std::string tabbed = sequence + "\tfolder";

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -7,6 +8,7 @@
 
 #include "sdf_tracker/core/camera.h"
 #include "sdf_tracker/core/depth_image.h"
+#include "sdf_tracker/core/sparse_tsdf_map.h"
 #include "sdf_tracker/core/surface.h"
 #include "sdf_tracker/core/tsdf_volume.h"
 
@@ -49,6 +51,23 @@ void writeVti(const std::string& path, const TsdfVolume& volume);
 /// Validates dimensions, spacing, origin, array sizes and values before building the volume,
 /// stored compactly when asked.
 TsdfVolume readVti(const std::string& path, bool compact_voxels = false);
+
+/// This package's own binary map (.sdfmap): every block of a sparse map, exactly, behind a header
+/// with a format version and the map's geometry, and followed by a checksum. Little-endian:
+///   "SDFTMAP\n", u32 version (1), u32 block side (8), f64 voxel size [m], f64 positive truncation
+///   [m], f64 x3 origin [m], u64 block count; per block i32 x3 block index and kBlockSide^3 voxels
+///   of f32 distance [m], f32 weight (x fastest); u64 FNV-1a hash of every byte before it.
+void writeSparseMap(const std::string& path, const SparseTsdfMap& map);
+/// Checks the header, the file's length against the block count (before allocating anything),
+/// every block index (in reach, no repeats), every voxel (finite distance, finite weight >= 0)
+/// and the checksum; the map is returned only when all of it holds.
+SparseTsdfMap readSparseMap(const std::string& path);
+
+/// A map file chosen by its extension: .sdfmap (writeSparseMap; a dense grid is stored as its
+/// observed blocks, and read back sparse) or .vti (writeVti; a sparse map as the box around its
+/// blocks, read back dense). Other extensions are refused, naming the path.
+void writeMap(const std::string& path, const TsdfMap& map);
+std::unique_ptr<TsdfMap> readMap(const std::string& path, bool compact_voxels = false);
 
 /// A timestamped camera-to-world pose.
 struct StampedPose {

@@ -80,6 +80,8 @@ class SparseTsdfMap : public TsdfMap {
     // Written so that NaN fails the comparison.
     return lattice.cwiseAbs().maxCoeff() < static_cast<float>(kMaxBlock) * kBlockSide;
   }
+  /// Whether a block index lies within the maps' reach (keyOf() does not wrap).
+  static bool inKeyRange(const BlockIndex& block) { return block.cwiseAbs().maxCoeff() <= kMaxBlock; }
   /// Block edge length [m].
   float blockSize() const { return kBlockSide * voxelSize(); }
 
@@ -136,7 +138,6 @@ class SparseTsdfMap : public TsdfMap {
   static constexpr int kBlockShift = 3;
   static constexpr int kLocalMask = kBlockSide - 1;
   static_assert(kBlockSide == 1 << kBlockShift, "kBlockSide must be 2^kBlockShift");
-  static bool inKeyRange(const BlockIndex& block);
 
   struct KeyHash {
     size_t operator()(uint64_t key) const { return static_cast<size_t>((key ^ (key >> 29)) * 0x9E3779B97F4A7C15ull >> 16); }
@@ -149,5 +150,8 @@ class SparseTsdfMap : public TsdfMap {
 
 /// The map as a dense grid: a copy of a dense one; the box around every block of a sparse one.
 TsdfVolume toDenseVolume(const TsdfMap& map);
+/// The map as blocks: a copy of a sparse one; the blocks of a dense one that hold an observed
+/// voxel (on the same lattice, so every observed voxel keeps its value).
+SparseTsdfMap toSparseMap(const TsdfMap& map);
 
 }  // namespace sdf_tracker

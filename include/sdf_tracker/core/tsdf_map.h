@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -93,6 +94,9 @@ class TsdfMap {
   /// Bytes held by voxel storage.
   virtual size_t memoryBytes() const = 0;
   virtual std::unique_ptr<TsdfMap> clone() const = 0;
+  /// Tells maps apart: new for every map constructed (built or loaded), kept by copies and
+  /// clone(), so a reader holding a copy can tell a replaced map from a changed one.
+  uint64_t identity() const { return identity_; }
 
  protected:
   /// The config's geometry with `type` for its storage; throws std::invalid_argument naming every
@@ -109,6 +113,7 @@ class TsdfMap {
   bool interpolate(const Voxel (&corners)[8], const Eigen::Vector3f& f, FieldSample* out) const;
 
   VolumeConfig config_;
+  uint64_t identity_;
   float voxel_size_;
   float inv_voxel_size_;
   float positive_truncation_;

@@ -28,7 +28,7 @@ class MapSnapshot {
 
  private:
   /// Copies the whole live map when there is no copy or it can no longer be brought up to date
-  /// (another grid was loaded, or the map was cleared since); true when it did.
+  /// (another map replaced it, or it was cleared since); true when it did.
   bool copyAllIfStale(const sdf_tracker::TsdfMap& live);
 
   std::mutex& map_mutex_;

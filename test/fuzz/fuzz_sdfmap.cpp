@@ -1,0 +1,14 @@
+// Fuzz target: sdf_tracker binary maps (io::readSparseMap).
+#include <stdexcept>
+
+#include "fuzz_input.h"
+#include "sdf_tracker/core/io.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::string path = sdf_tracker::fuzz::writeInput(data, size, "map.sdfmap");
+  try {
+    sdf_tracker::io::readSparseMap(path);
+  } catch (const std::runtime_error&) {
+  }
+  return 0;
+}
