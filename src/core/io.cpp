@@ -219,6 +219,10 @@ void writeObj(const std::string& path, const TriangleMesh& mesh) {
   out.commit();
 }
 
+void writeMesh(const std::string& path, const TriangleMesh& mesh) {
+  hasExtension(path, ".obj") ? writeObj(path, mesh) : writePly(path, mesh);
+}
+
 TriangleMesh readPlyMesh(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
@@ -439,6 +443,10 @@ struct MapFileBlock {
 #pragma pack(pop)
 static_assert(sizeof(MapFileHeader) == 64 && sizeof(Voxel) == 8, "the .sdfmap layout is fixed");
 
+[[noreturn]] void failUnknownMapExtension(const std::string& path) {
+  fail(path, "unknown map file extension (known: .sdfmap, .vti)");
+}
+
 }  // namespace
 
 void writeSparseMap(const std::string& path, const SparseTsdfMap& map) {
@@ -554,14 +562,14 @@ void writeMap(const std::string& path, const TsdfMap& map) {
   } else if (hasExtension(path, ".vti")) {
     writeVti(path, toDenseVolume(map));
   } else {
-    fail(path, "unknown map file extension (known: .sdfmap, .vti)");
+    failUnknownMapExtension(path);
   }
 }
 
 std::unique_ptr<TsdfMap> readMap(const std::string& path, bool compact_voxels) {
   if (hasExtension(path, ".sdfmap")) return std::make_unique<SparseTsdfMap>(readSparseMap(path));
   if (hasExtension(path, ".vti")) return std::make_unique<TsdfVolume>(readVti(path, compact_voxels));
-  fail(path, "unknown map file extension (known: .sdfmap, .vti)");
+  failUnknownMapExtension(path);
 }
 
 void writeTrajectory(const std::string& path, const std::vector<StampedPose>& poses) {

@@ -1,6 +1,5 @@
 #include "sdf_tracker/ros/map_services.h"
 
-#include "sdf_tracker/core/sparse_tsdf_map.h"
 #include "sdf_tracker/core/surface.h"
 
 namespace sdf_tracker_ros {
@@ -57,7 +56,7 @@ void MapServices::writeAtShutdown() {
   }
   if (options_.output_triangles) attempt("triangles", [&] { st::io::writeObj(outputPath("", "triangles.obj"), mesh); });
   if (options_.output_volume) {
-    attempt("volume", [&] { st::io::writeVti(outputPath("", "sdf_volume.vti"), st::toDenseVolume(*map)); });
+    attempt("volume", [&] { st::io::writeMap(outputPath("", "sdf_volume.vti"), *map); });
   }
 }
 
@@ -86,8 +85,7 @@ bool MapServices::saveMesh(sdf_tracker::SavePath::Request& req, sdf_tracker::Sav
     const std::string path = outputPath(req.path, "mesh.ply");
     std::vector<st::io::StampedPose> trajectory;
     const st::TriangleMesh mesh = st::extractMesh(*copyMap(&trajectory));
-    const bool obj = path.size() > 4 && path.compare(path.size() - 4, 4, ".obj") == 0;
-    obj ? st::io::writeObj(path, mesh) : st::io::writePly(path, mesh);
+    st::io::writeMesh(path, mesh);
     writeTrajectory(trajectory);
     return "wrote " + std::to_string(mesh.triangles.size()) + " triangles to " + path;
   });

@@ -228,7 +228,7 @@ int run(int argc, char** argv) {
   st::io::writePly(output.path("cloud.ply"), st::extractSurfaceCloud(pipeline.map()));
   if (args.has("save-map")) st::io::writeMap(output.path("map.sdfmap"), pipeline.map());
   if (args.has("save-volume")) {
-    st::io::writeVti(output.path("sdf_volume.vti"), st::toDenseVolume(pipeline.map()));
+    st::io::writeMap(output.path("sdf_volume.vti"), pipeline.map());
     st::io::writeObj(output.path("triangles.obj"), mesh);
   }
 

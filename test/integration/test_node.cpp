@@ -46,6 +46,8 @@ namespace {
 constexpr double kMaxAteDifference_m = 0.01;
 constexpr double kStatusTimeout_s = 20.0;
 constexpr double kResend_s = 2.0;
+/// The camera of every synthetic frame the tests send.
+const st::PinholeCamera kQvga = st::PinholeCamera::tumFreiburg1().scaledTo(320, 240);
 
 class NodeTest : public ::testing::Test {
  protected:
@@ -104,6 +106,22 @@ class NodeTest : public ::testing::Test {
     return arrived ? statuses_.back() : sdf_tracker::TrackingStatus();
   }
 
+  /// The room's exact depth from the desk path at t_s, as the QVGA camera's frame stamped stamp_s.
+  static sensor_msgs::Image deskFrame(double stamp_s, double t_s,
+                                      const std::string& frame_id = "camera_depth_optical_frame") {
+    st::synthetic::NoiseModel exact;
+    exact.enabled = false;
+    std_msgs::Header header;
+    header.stamp = ros::Time(stamp_s);
+    header.frame_id = frame_id;
+    const auto T = st::synthetic::cameraPose(st::synthetic::Motion::kDesk, t_s, 10.0);
+    return sdf_tracker_ros::toImageMsg(st::synthetic::Scene::indoorRoom().render(kQvga, T, exact, 0), header);
+  }
+  /// Publishes deskFrame(stamp_s, t_s) and waits for the node's status about it.
+  sdf_tracker::TrackingStatus publishDeskFrame(double stamp_s, double t_s) {
+    return publishAndWait(deskFrame(stamp_s, t_s), kQvga);
+  }
+
   ros::NodeHandle nh_;
   ros::AsyncSpinner spinner_{1};
   ros::Publisher image_pub_, info_pub_;
@@ -120,7 +138,7 @@ class NodeTest : public ::testing::Test {
 std::string makeSyntheticBag(const std::string& directory, int frames) {
   st::synthetic::SequenceSpec spec;
   spec.frames = frames;
-  spec.camera = st::PinholeCamera::tumFreiburg1().scaledTo(320, 240);
+  spec.camera = kQvga;
   spec.seed = 11;
   st::synthetic::writeSequence(directory, spec);
   const std::string bag = directory + "/sequence.bag";
@@ -199,17 +217,7 @@ TEST_F(NodeTest, TracksAQvgaBagLikeTheOfflineRunnerAndSurvivesBadInput) {
 TEST_F(NodeTest, SaveMeshWritesAPlyThatLoadsBack) {
   ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
   // Three frames of its own after a reset, whatever ran before.
-  const st::PinholeCamera camera = st::PinholeCamera::tumFreiburg1().scaledTo(320, 240);
-  st::synthetic::NoiseModel exact;
-  exact.enabled = false;
-  for (int i = 0; i < 3; ++i) {
-    std_msgs::Header header;
-    header.stamp = ros::Time(100.0 + i);
-    header.frame_id = "camera_depth_optical_frame";
-    const auto T = st::synthetic::cameraPose(st::synthetic::Motion::kDesk, 0.0, 10.0);
-    publishAndWait(sdf_tracker_ros::toImageMsg(st::synthetic::Scene::indoorRoom().render(camera, T, exact, 0), header),
-                   camera);
-  }
+  for (int i = 0; i < 3; ++i) publishDeskFrame(100.0 + i, 0.0);
   sdf_tracker::SavePath save;
   save.request.path = "/tmp/sdf_tracker_node_test_mesh.ply";
   ASSERT_TRUE(ros::service::call("sdf_tracker/save_mesh", save));
@@ -219,18 +227,8 @@ TEST_F(NodeTest, SaveMeshWritesAPlyThatLoadsBack) {
 }
 
 TEST_F(NodeTest, AMapSavedBySaveVolumeIsTrackedInAfterLoadVolume) {
-  const st::PinholeCamera camera = st::PinholeCamera::tumFreiburg1().scaledTo(320, 240);
-  st::synthetic::NoiseModel exact;
-  exact.enabled = false;
-  auto frameAt = [&](double stamp_s, double t_s) {
-    std_msgs::Header header;
-    header.stamp = ros::Time(stamp_s);
-    header.frame_id = "camera_depth_optical_frame";
-    const auto T = st::synthetic::cameraPose(st::synthetic::Motion::kDesk, t_s, 10.0);
-    return sdf_tracker_ros::toImageMsg(st::synthetic::Scene::indoorRoom().render(camera, T, exact, 0), header);
-  };
   ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
-  for (int i = 0; i < 3; ++i) publishAndWait(frameAt(500.0 + i / 30.0, i / 30.0), camera);
+  for (int i = 0; i < 3; ++i) publishDeskFrame(500.0 + i / 30.0, i / 30.0);
   sdf_tracker::SavePath save;
   save.request.path = "/tmp/sdf_tracker_node_test_map.sdfmap";
   ASSERT_TRUE(ros::service::call("sdf_tracker/save_volume", save));
@@ -242,7 +240,7 @@ TEST_F(NodeTest, AMapSavedBySaveVolumeIsTrackedInAfterLoadVolume) {
   load.request.path = save.request.path;
   ASSERT_TRUE(ros::service::call("sdf_tracker/load_volume", load));
   ASSERT_TRUE(load.response.success) << load.response.message;
-  const auto in_loaded = publishAndWait(frameAt(510.0, 1 / 30.0), camera);
+  const auto in_loaded = publishDeskFrame(510.0, 1 / 30.0);
   EXPECT_EQ(in_loaded.status, sdf_tracker::TrackingStatus::OK) << in_loaded.status_text;
   EXPECT_EQ(in_loaded.status_text.find("first frame"), std::string::npos)
       << "the frame is tracked in the loaded map, not used to start a new one: " << in_loaded.status_text;
@@ -254,24 +252,14 @@ TEST_F(NodeTest, AMapSavedBySaveVolumeIsTrackedInAfterLoadVolume) {
 }
 
 TEST_F(NodeTest, AFrameFromThePastIsDroppedWithoutWipingTheMap) {
-  const st::PinholeCamera camera = st::PinholeCamera::tumFreiburg1().scaledTo(320, 240);
-  st::synthetic::NoiseModel exact;
-  exact.enabled = false;
-  auto frameAt = [&](double stamp_s, double t_s) {
-    std_msgs::Header header;
-    header.stamp = ros::Time(stamp_s);
-    header.frame_id = "camera_depth_optical_frame";
-    const auto T = st::synthetic::cameraPose(st::synthetic::Motion::kDesk, t_s, 10.0);
-    return sdf_tracker_ros::toImageMsg(st::synthetic::Scene::indoorRoom().render(camera, T, exact, 0), header);
-  };
   ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
-  for (int i = 0; i < 3; ++i) publishAndWait(frameAt(300.0 + i / 30.0, i / 30.0), camera);
+  for (int i = 0; i < 3; ++i) publishDeskFrame(300.0 + i / 30.0, i / 30.0);
   const size_t poses_before = poses_.size();
   // A stray frame stamped 0.5 s (a restarted clock): dropped and said, the map and path kept.
-  const auto stray = publishAndWait(frameAt(0.5, 3 / 30.0), camera);
+  const auto stray = publishDeskFrame(0.5, 3 / 30.0);
   EXPECT_EQ(stray.status, sdf_tracker::TrackingStatus::BAD_INPUT);
   EXPECT_NE(stray.status_text.find("before the last frame"), std::string::npos) << stray.status_text;
-  const auto next = publishAndWait(frameAt(300.0 + 4 / 30.0, 4 / 30.0), camera);
+  const auto next = publishDeskFrame(300.0 + 4 / 30.0, 4 / 30.0);
   EXPECT_EQ(next.status, sdf_tracker::TrackingStatus::OK) << next.status_text << ": the map is still there";
   ros::Duration(0.3).sleep();
   std::lock_guard<std::mutex> lock(mutex_);
@@ -300,17 +288,9 @@ TEST_F(NodeTest, NeverGivesAFrameThatHasAParentASecondOne) {
   ros::Duration(1.0).sleep();  // the node's tf listener hears the static transform
   ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
 
-  const st::PinholeCamera camera = st::PinholeCamera::tumFreiburg1().scaledTo(320, 240);
-  st::synthetic::NoiseModel exact;
-  exact.enabled = false;
   const size_t poses_before = poses_.size();
   for (int i = 0; i < 3; ++i) {
-    std_msgs::Header header;
-    header.stamp = ros::Time(200.0 + i);
-    header.frame_id = "/" + frame;  // a leading slash, as in the TUM bags
-    const auto T = st::synthetic::cameraPose(st::synthetic::Motion::kDesk, 0.1 * i, 10.0);
-    publishAndWait(sdf_tracker_ros::toImageMsg(st::synthetic::Scene::indoorRoom().render(camera, T, exact, 0), header),
-                   camera);
+    publishAndWait(deskFrame(200.0 + i, 0.1 * i, "/" + frame), kQvga);  // a leading slash, as in the TUM bags
   }
   ros::Duration(0.5).sleep();
   std::lock_guard<std::mutex> lock(tf_mutex);

@@ -208,6 +208,15 @@ TEST_F(FusionFixture, ADenseRegionAndALiveCopyHoldTheSameVoxels) {
   EXPECT_GT(sparse.clearedAt(), synced) << "a reader can tell that its copy is stale";
 }
 
+/// The desk path's pose at frame i (30 Hz), in the room.
+Eigen::Isometry3d deskPose(int i) { return synthetic::cameraPose(synthetic::Motion::kDesk, i / 30.0, 10.0); }
+
+/// The room seen from deskPose(i) with Kinect-like noise (a fixed seed per frame).
+DepthImage noisyDeskFrame(const PinholeCamera& camera, int i) {
+  static const synthetic::Scene room = synthetic::Scene::indoorRoom();
+  return room.render(camera, deskPose(i), synthetic::NoiseModel(), static_cast<uint32_t>(i));
+}
+
 TEST(SparseMap, TracksTheDeskPathAsTheDenseGridDoes) {
   const PinholeCamera camera = test::testCamera();
   Settings settings = preset("default");
@@ -219,12 +228,9 @@ TEST(SparseMap, TracksTheDeskPathAsTheDenseGridDoes) {
   setParameter(&settings, "MapType", std::string("sparse"));
   SdfPipeline sparse(settings.pipeline);
   ASSERT_EQ(sparse.map().type(), MapType::kSparse);
-  synthetic::NoiseModel kinect;
-  const synthetic::Scene room = synthetic::Scene::indoorRoom();
   double worst_m = 0.0;
   for (int i = 0; i < 60; ++i) {
-    const Eigen::Isometry3d T_scene_C = synthetic::cameraPose(synthetic::Motion::kDesk, i / 30.0, 10.0);
-    const DepthImage depth = room.render(camera, T_scene_C, kinect, static_cast<uint32_t>(i));
+    const DepthImage depth = noisyDeskFrame(camera, i);
     const FrameReport a = dense.processFrame(depth, camera, i / 30.0);
     const FrameReport b = sparse.processFrame(depth, camera, i / 30.0);
     ASSERT_TRUE(a.track.tracked() && b.track.tracked()) << "frame " << i;
@@ -239,18 +245,11 @@ TEST(SparseMap, ASavedMapIsTrackedAfterLoadingAsBeforeSaving) {
   Settings settings = preset("default");
   setParameter(&settings, "MapType", std::string("sparse"));
   SdfPipeline mapper(settings.pipeline);
-  synthetic::NoiseModel kinect;
-  const synthetic::Scene room = synthetic::Scene::indoorRoom();
-  auto frame = [&](int i) {
-    return room.render(camera, synthetic::cameraPose(synthetic::Motion::kDesk, i / 30.0, 10.0), kinect,
-                       static_cast<uint32_t>(i));
-  };
   // The pipeline's world is the first camera's frame.
-  const Eigen::Isometry3d T_scene_W = synthetic::cameraPose(synthetic::Motion::kDesk, 0.0, 10.0);
-  auto truth = [&](int i) { return T_scene_W.inverse() * synthetic::cameraPose(synthetic::Motion::kDesk, i / 30.0, 10.0); };
+  auto truth = [](int i) { return deskPose(0).inverse() * deskPose(i); };
   double mapping_worst_m = 0.0;
   for (int i = 0; i < 45; ++i) {
-    ASSERT_TRUE(mapper.processFrame(frame(i), camera, i / 30.0).track.tracked()) << "frame " << i;
+    ASSERT_TRUE(mapper.processFrame(noisyDeskFrame(camera, i), camera, i / 30.0).track.tracked()) << "frame " << i;
     mapping_worst_m = std::max(mapping_worst_m, (mapper.pose().translation() - truth(i).translation()).norm());
   }
   const std::string path = test::scratchDirectory("tracked_map") + "/map.sdfmap";
@@ -264,7 +263,7 @@ TEST(SparseMap, ASavedMapIsTrackedAfterLoadingAsBeforeSaving) {
   EXPECT_EQ(session.map().memoryBytes(), mapper.map().memoryBytes());
   double worst_m = 0.0;
   for (int i = 0; i < 45; i += 3) {
-    const FrameReport report = session.processFrame(frame(i), camera, i / 30.0);
+    const FrameReport report = session.processFrame(noisyDeskFrame(camera, i), camera, i / 30.0);
     ASSERT_TRUE(report.track.tracked()) << "frame " << i << ": " << report.track.message;
     worst_m = std::max(worst_m, (session.pose().translation() - truth(i).translation()).norm());
   }

@@ -113,11 +113,13 @@ class TsdfMap {
   bool interpolate(const Voxel (&corners)[8], const Eigen::Vector3f& f, FieldSample* out) const;
 
   VolumeConfig config_;
-  uint64_t identity_;
   float voxel_size_;
   float inv_voxel_size_;
   float positive_truncation_;
   Eigen::Vector3f origin_;
+
+ private:
+  uint64_t identity_;
 };
 
 inline bool TsdfMap::interpolate(const Voxel (&c)[8], const Eigen::Vector3f& f, FieldSample* out) const {
