@@ -11,27 +11,6 @@ namespace sdf_tracker {
 
 SparseTsdfMap::SparseTsdfMap(const VolumeConfig& config) : TsdfMap(config, MapType::kSparse) {}
 
-SparseTsdfMap::SparseTsdfMap(const SparseTsdfMap& other)
-    : TsdfMap(other), revision_(other.revision_), cleared_at_(other.cleared_at_) {
-  blocks_.reserve(other.blocks_.size());
-  for (const auto& [key, block] : other.blocks_) blocks_.emplace(key, std::make_unique<VoxelBlock>(*block));
-}
-
-SparseTsdfMap& SparseTsdfMap::operator=(const SparseTsdfMap& other) {
-  if (this != &other) *this = SparseTsdfMap(other);
-  return *this;
-}
-
-const VoxelBlock* SparseTsdfMap::find(const BlockIndex& block) const {
-  if (!inKeyRange(block)) return nullptr;
-  const auto it = blocks_.find(keyOf(block));
-  return it == blocks_.end() ? nullptr : it->second.get();
-}
-
-VoxelBlock* SparseTsdfMap::find(const BlockIndex& block) {
-  return const_cast<VoxelBlock*>(static_cast<const SparseTsdfMap*>(this)->find(block));
-}
-
 VoxelBlock& SparseTsdfMap::allocate(const BlockIndex& block) {
   if (!inKeyRange(block)) {
     std::ostringstream msg;
@@ -39,12 +18,11 @@ VoxelBlock& SparseTsdfMap::allocate(const BlockIndex& block) {
         << " blocks from the origin (" << kMaxBlock * blockSize() << " m)";
     throw std::out_of_range(msg.str());
   }
-  std::unique_ptr<VoxelBlock>& slot = blocks_[keyOf(block)];
-  if (!slot) {
-    slot = std::make_unique<VoxelBlock>();
-    slot->voxels.fill(Voxel{positive_truncation_, 0.0f});
-  }
-  return *slot;
+  return blocks_.findOrInsert(keyOf(block), [this] {
+    auto fresh = std::make_unique<VoxelBlock>();
+    fresh->voxels.fill(Voxel{positive_truncation_, 0.0f});
+    return fresh;
+  });
 }
 
 void SparseTsdfMap::remove(const BlockIndex& block) {
@@ -63,7 +41,7 @@ std::vector<SparseTsdfMap::BlockIndex> SparseTsdfMap::indicesOf(std::vector<uint
 std::vector<SparseTsdfMap::BlockIndex> SparseTsdfMap::blockIndices() const {
   std::vector<uint64_t> keys;
   keys.reserve(blocks_.size());
-  for (const auto& entry : blocks_) keys.push_back(entry.first);
+  blocks_.forEach([&keys](uint64_t key, const VoxelBlock&) { keys.push_back(key); });
   return indicesOf(std::move(keys));
 }
 
@@ -78,11 +56,10 @@ void SparseTsdfMap::bounds(Eigen::Vector3i* first, Eigen::Vector3i* dims) const 
     return;
   }
   Eigen::Vector3i lo = Eigen::Vector3i::Constant(INT_MAX), hi = Eigen::Vector3i::Constant(INT_MIN);
-  for (const auto& entry : blocks_) {
-    const BlockIndex b = indexOf(entry.first);
+  forEachBlock([&lo, &hi](const BlockIndex& b, const VoxelBlock&) {
     lo = lo.cwiseMin(b);
     hi = hi.cwiseMax(b);
-  }
+  });
   *first = firstVoxel(lo);
   *dims = (hi - lo + Eigen::Vector3i::Ones()) * kBlockSide;
 }
@@ -108,9 +85,9 @@ void SparseTsdfMap::clear() {
 
 std::vector<SparseTsdfMap::BlockIndex> SparseTsdfMap::changedSince(uint64_t revision) const {
   std::vector<uint64_t> keys;
-  for (const auto& [key, block] : blocks_) {
-    if (block->changed_at > revision) keys.push_back(key);
-  }
+  blocks_.forEach([&keys, revision](uint64_t key, const VoxelBlock& block) {
+    if (block.changed_at > revision) keys.push_back(key);
+  });
   return indicesOf(std::move(keys));
 }
 
@@ -126,11 +103,12 @@ void SparseTsdfMap::copyBlocksFrom(const SparseTsdfMap& source, const std::vecto
 }
 
 size_t SparseTsdfMap::memoryBytes() const {
-  // The blocks, and the hash table's buckets and nodes (key, pointer, next) as libstdc++ lays them out.
-  return blocks_.size() * (sizeof(VoxelBlock) + 3 * sizeof(void*)) + blocks_.bucket_count() * sizeof(void*);
+  // The blocks and the table's slots.
+  return blocks_.size() * sizeof(VoxelBlock) + blocks_.capacity() * BlockTable<VoxelBlock>::slotBytes();
 }
 
-bool SparseTsdfMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
+template <typename FindBlock>
+bool SparseTsdfMap::sampleVia(const Eigen::Vector3f& p_W, FieldSample* out, const FindBlock& findBlock) const {
   const Eigen::Vector3f g = toLattice(p_W);
   if (!withinReach(g)) return false;
   const Eigen::Vector3f floor_g(std::floor(g.x()), std::floor(g.y()), std::floor(g.z()));
@@ -139,29 +117,84 @@ bool SparseTsdfMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
   Voxel corners[8];
   if (local.maxCoeff() < kBlockSide - 1) {
     // The whole cell lies in one block (343 of 512 cells): one lookup.
-    const VoxelBlock* block = find(blockOf(base));
+    const VoxelBlock* block = findBlock(blockOf(base));
     if (!block) return false;
     const Voxel* v = block->voxels.data() + VoxelBlock::index(local);
     constexpr int dy = kBlockSide, dz = kBlockSide * kBlockSide;
     corners[0] = v[0], corners[1] = v[1], corners[2] = v[dy], corners[3] = v[dy + 1];
     corners[4] = v[dz], corners[5] = v[dz + 1], corners[6] = v[dz + dy], corners[7] = v[dz + dy + 1];
   } else {
-    // The cell straddles blocks along the axes where it sits on the block's last voxel: one
-    // lookup per block it touches (two, four or eight).
-    const BlockIndex first_block = blockOf(base);
-    const int straddled = (local.x() == kLocalMask) | (local.y() == kLocalMask) << 1 | (local.z() == kLocalMask) << 2;
-    const VoxelBlock* blocks[8] = {};
+    // The cell straddles blocks: each corner from its own block.
     for (int c = 0; c < 8; ++c) {
-      const int slot = c & straddled;  // which neighbouring block holds corner c
-      if (!blocks[slot]) {
-        blocks[slot] = find(first_block + Eigen::Vector3i(slot & 1, (slot >> 1) & 1, (slot >> 2) & 1));
-        if (!blocks[slot]) return false;
-      }
       const Eigen::Vector3i corner = base + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1);
-      corners[c] = blocks[slot]->voxels[VoxelBlock::index(localOf(corner))];
+      const VoxelBlock* block = findBlock(blockOf(corner));
+      if (!block) return false;
+      corners[c] = block->voxels[VoxelBlock::index(localOf(corner))];
     }
   }
   return interpolate(corners, g - floor_g, out);
+}
+
+bool SparseTsdfMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
+  // withinReach() held, so every block index is in key range.
+  return sampleVia(p_W, out, [this](const BlockIndex& block) { return blocks_.find(keyOf(block)); });
+}
+
+/// The blocks of a box of block indices in a flat array (null where the map holds none), filled
+/// once; samples whose blocks all lie in the box read them from it, others go through the table.
+class SparseTsdfMap::RegionSampler final : public FieldSampler {
+ public:
+  RegionSampler(const SparseTsdfMap& map, const Eigen::AlignedBox3f& region_W) : map_(map) {
+    if (region_W.isEmpty() || !region_W.min().allFinite() || !region_W.max().allFinite()) return;
+    const Eigen::Vector3f lo = map.toLattice(region_W.min()), hi = map.toLattice(region_W.max());
+    if (!withinReach(lo) || !withinReach(hi)) return;
+    // A cell at the box's far edge reads the next block's first voxels too.
+    first_ = blockContaining(lo);
+    const BlockIndex last = blockContaining(hi + Eigen::Vector3f::Ones());
+    dims_ = last - first_ + BlockIndex::Ones();
+    const size_t cells = static_cast<size_t>(dims_.x()) * dims_.y() * dims_.z();
+    if (cells > kMaxCells) {
+      dims_.setZero();
+      return;
+    }
+    cells_.assign(cells, nullptr);
+    map.forEachBlockIn(first_, last, [this](const BlockIndex& index, const VoxelBlock& block) {
+      cells_[cellOf(index)] = &block;
+    });
+  }
+
+  bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override {
+    return map_.sampleVia(p_W, out, [this](const BlockIndex& block) {
+      const int at = cellOf(block);
+      return at >= 0 ? cells_[at] : map_.blocks_.find(keyOf(block));
+    });
+  }
+
+ private:
+  /// Bounds the array at 2 MiB of pointers (a 10 m cube of 16 cm blocks); larger regions sample
+  /// through the table.
+  static constexpr size_t kMaxCells = size_t{1} << 18;
+
+  /// The block's place in cells_, or -1 outside the box.
+  int cellOf(const BlockIndex& block) const {
+    // Unsigned, a negative offset compares as large: one test per axis.
+    const auto x = static_cast<unsigned>(block.x() - first_.x()), y = static_cast<unsigned>(block.y() - first_.y()),
+               z = static_cast<unsigned>(block.z() - first_.z());
+    if (x >= static_cast<unsigned>(dims_.x()) || y >= static_cast<unsigned>(dims_.y()) ||
+        z >= static_cast<unsigned>(dims_.z())) {
+      return -1;
+    }
+    return static_cast<int>((z * dims_.y() + y) * dims_.x() + x);
+  }
+
+  const SparseTsdfMap& map_;
+  BlockIndex first_ = BlockIndex::Zero();
+  Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
+  std::vector<const VoxelBlock*> cells_;
+};
+
+std::unique_ptr<FieldSampler> SparseTsdfMap::sampler(const Eigen::AlignedBox3f& region_W) const {
+  return std::make_unique<RegionSampler>(*this, region_W);
 }
 
 TsdfVolume toDenseVolume(const TsdfMap& map) {

@@ -40,6 +40,9 @@ struct NormalEquations {
 /// Below this the field is flat (truncated or unresolved) and the point says nothing.
 constexpr float kMinGradientNorm = 0.2f;
 
+/// How far, in voxels, the box of a frame's points at the guess is widened for the sampler.
+constexpr float kSamplerMargin = 8.0f;
+
 /// Huber weight, eq. (20).
 inline float huberWeight(float residual, float k) {
   const float a = std::fabs(residual);
@@ -63,12 +66,11 @@ std::vector<Eigen::Vector3f> backProjectSubsampled(const DepthImage& depth, cons
 /// Builds the normal equations at pose T_W_C. The increment is expressed about the camera centre c
 /// (world axes), so rotation and translation stay decoupled wherever the volume's origin lies:
 /// d/dxi D(exp(xi) (p - c) + c) = [ (p - c) x grad D ; grad D ].
-NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_C, const TsdfMap& map,
-                                     const Eigen::Isometry3d& T_W_C, float huber_k, const DepthNoiseModel* noise,
-                                     bool normalize_by_gradient) {
+NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_C, const FieldSampler& field,
+                                     float dmax, const Eigen::Isometry3d& T_W_C, float huber_k,
+                                     const DepthNoiseModel* noise, bool normalize_by_gradient) {
   const Eigen::Isometry3f T = T_W_C.cast<float>();
   const Eigen::Vector3f c = T.translation();
-  const float dmax = map.positiveTruncation();
   const float reference_sigma = noise ? noise->referenceSigma() : 1.0f;
   const int n = static_cast<int>(points_C.size());
   NormalEquations sum;
@@ -76,7 +78,7 @@ NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_
   for (int idx = 0; idx < n; ++idx) {
     const Eigen::Vector3f p_W = T * points_C[idx];
     FieldSample s;
-    if (!map.sample(p_W, &s) || !(std::fabs(s.distance_m) < dmax)) continue;
+    if (!field.sample(p_W, &s) || !(std::fabs(s.distance_m) < dmax)) continue;
     if (normalize_by_gradient) {
       // A projective field overstates Euclidean distance by 1/cos(viewing angle) and so does
       // its gradient norm: dividing by it makes residuals metric and consistent across views.
@@ -147,6 +149,21 @@ Vector6d constrainedStep(const NormalEquations& eq, const ScaledEquations& scale
   return S * (V * z);
 }
 
+/// Where the points can land while the pose is refined from T_W_C: the box around them, widened by
+/// `margin_m` for the motion of the iterations.
+Eigen::AlignedBox3f regionReached(const std::vector<Eigen::Vector3f>& points_C, const Eigen::Isometry3d& T_W_C,
+                                  float margin_m) {
+  Eigen::AlignedBox3f box_C;
+  for (const Eigen::Vector3f& p : points_C) box_C.extend(p);
+  Eigen::AlignedBox3f box_W;
+  if (box_C.isEmpty()) return box_W;
+  const Eigen::Isometry3f T = T_W_C.cast<float>();
+  for (int corner = 0; corner < 8; ++corner) {
+    box_W.extend(T * box_C.corner(static_cast<Eigen::AlignedBox3f::CornerType>(corner)));
+  }
+  return Eigen::AlignedBox3f(box_W.min().array() - margin_m, box_W.max().array() + margin_m);
+}
+
 Eigen::Isometry3d applyIncrementAboutCentre(const Vector6d& xi, const Eigen::Isometry3d& T_W_C) {
   const Eigen::Vector3d c = T_W_C.translation();
   return Eigen::Translation3d(c) * expSe3(xi) * Eigen::Translation3d(-c) * T_W_C;
@@ -209,12 +226,15 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
   const float huber_k = static_cast<float>(config_.huber_coefficient * map.positiveTruncation());
   Eigen::Isometry3d T_W_C = T_W_C_guess;
   NormalEquations last;
+  std::unique_ptr<FieldSampler> field;
   for (const PyramidLevel& level : config_.levels) {
     const std::vector<Eigen::Vector3f> points_C = backProjectSubsampled(depth, camera, level.stride);
+    // The first level's points span the image; a few centimetres cover the motion of a frame.
+    if (!field) field = map.sampler(regionReached(points_C, T_W_C_guess, kSamplerMargin * map.voxelSize()));
     int iterations = 0;
     for (int it = 1; it <= level.max_iterations; ++it) {
-      last = buildNormalEquations(points_C, map, T_W_C, huber_k, config_.sensor_weights ? &config_.noise : nullptr,
-                                  config_.normalize_by_gradient);
+      last = buildNormalEquations(points_C, *field, map.positiveTruncation(), T_W_C, huber_k,
+                                  config_.sensor_weights ? &config_.noise : nullptr, config_.normalize_by_gradient);
       if (last.count < config_.min_valid_points) {
         std::ostringstream msg;
         msg << "only " << last.count << " points at stride " << level.stride

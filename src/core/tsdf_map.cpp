@@ -63,6 +63,24 @@ TsdfMap::TsdfMap(VolumeConfig config, MapType type) : config_(std::move(config))
   origin_ = config_.origin_W.cast<float>();
 }
 
+namespace {
+
+/// Samples through the map's own sample(): for storage with nothing to prepare.
+class DirectSampler final : public FieldSampler {
+ public:
+  explicit DirectSampler(const TsdfMap& map) : map_(map) {}
+  bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override { return map_.sample(p_W, out); }
+
+ private:
+  const TsdfMap& map_;
+};
+
+}  // namespace
+
+std::unique_ptr<FieldSampler> TsdfMap::sampler(const Eigen::AlignedBox3f& /*region_W*/) const {
+  return std::make_unique<DirectSampler>(*this);
+}
+
 std::unique_ptr<TsdfMap> makeMap(const VolumeConfig& config) {
   if (config.type == MapType::kSparse) return std::make_unique<SparseTsdfMap>(config);
   return std::make_unique<TsdfVolume>(config);

@@ -5,7 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <map>
+#include <random>
 
+#include "sdf_tracker/core/block_table.h"
 #include "sdf_tracker/core/integrator.h"
 #include "sdf_tracker/core/io.h"
 #include "sdf_tracker/core/parameters.h"
@@ -35,6 +38,45 @@ TEST(SparseMap, BlocksAndKeysAddressNegativeVoxelsToo) {
     EXPECT_EQ(SparseTsdfMap::indexOf(SparseTsdfMap::keyOf(b)), b);
   }
   EXPECT_LT(SparseTsdfMap::keyOf(BlockIndex(5, 0, 0)), SparseTsdfMap::keyOf(BlockIndex(0, 0, 1))) << "z sorts first";
+}
+
+TEST(BlockTable, KeepsTheSameEntriesAsAnOrderedMapThroughInsertsErasesGrowthAndCopies) {
+  // Few distinct keys clustered in runs, so probe runs collide, wrap and get erased in the middle.
+  std::mt19937_64 rng(11);
+  std::uniform_int_distribution<uint64_t> pick_key(0, 3000);
+  BlockTable<int> table;
+  std::map<uint64_t, int> expected;
+  for (int step = 0; step < 20000; ++step) {
+    const uint64_t key = pick_key(rng) * (step % 3 == 0 ? 1 : 1ull << 21);
+    if (rng() % 3 == 0) {
+      EXPECT_EQ(table.erase(key), expected.erase(key) == 1) << "erase " << key;
+    } else {
+      const int value = step;
+      int& stored = table.findOrInsert(key, [value] { return std::make_unique<int>(value); });
+      expected.emplace(key, value);
+      EXPECT_EQ(stored, expected.at(key)) << "insert " << key;
+    }
+    ASSERT_EQ(table.size(), expected.size());
+  }
+  EXPECT_LE(2 * table.size(), table.capacity()) << "at most half full";
+  const BlockTable<int> copy = table;
+  for (const BlockTable<int>* t : std::initializer_list<const BlockTable<int>*>{&table, &copy}) {
+    std::map<uint64_t, int> listed;
+    t->forEach([&listed](uint64_t key, int value) { listed.emplace(key, value); });
+    EXPECT_EQ(listed, expected);
+    for (uint64_t key = 0; key <= 3000; ++key) {
+      const auto it = expected.find(key);
+      const int* found = t->find(key);
+      ASSERT_EQ(found != nullptr, it != expected.end()) << "find " << key;
+      if (found) {
+        EXPECT_EQ(*found, it->second);
+      }
+    }
+  }
+  BlockTable<int> moved = std::move(table);
+  EXPECT_EQ(moved.size(), expected.size());
+  EXPECT_EQ(table.size(), 0u);  // NOLINT(bugprone-use-after-move): a moved-from table is empty and usable
+  EXPECT_EQ(table.find(expected.begin()->first), nullptr);
 }
 
 TEST(SparseMap, HoldsOnlyTheBlocksItWasGivenAndFindsVoxelsThroughThem) {
@@ -88,6 +130,51 @@ TEST(SparseMap, SamplesExactlyAsTheDenseGridAcrossBlockBorders) {
   EXPECT_FALSE(sparse.sample(dense.position(40, 3, 3), &s)) << "no block there";
   EXPECT_FALSE(sparse.sample(Eigen::Vector3f::Constant(std::nanf("")), &s));
   EXPECT_FALSE(sparse.sample(Eigen::Vector3f::Constant(1e9f), &s));
+}
+
+TEST(SparseMap, ARegionsSamplerAgreesWithTheMapInsideAndOutsideItsRegion) {
+  SparseTsdfMap map(sparseRoom());
+  for (int k = -4; k < 28; ++k)
+    for (int j = 0; j < 24; ++j)
+      for (int i = 0; i < 40; ++i) {
+        if ((i / kBlockSide + k) % 5 == 0) continue;  // leave some blocks out
+        map.allocate(SparseTsdfMap::blockOf({i, j, k})).voxels[VoxelBlock::index(SparseTsdfMap::localOf({i, j, k}))] =
+            Voxel{0.001f * (i - j + 2 * k), 1.0f};
+      }
+  // A region over part of the blocks (indexed by probing its cells), one far larger than the map
+  // (indexed by scanning the map) and none: the sampler must match the map everywhere.
+  const Eigen::AlignedBox3f region(map.position(5, 2, 0), map.position(20, 18, 12));
+  const Eigen::AlignedBox3f wide(map.position(-200, -200, -200), map.position(200, 200, 200));
+  for (const Eigen::AlignedBox3f& box : {region, wide, Eigen::AlignedBox3f()}) {
+    const std::unique_ptr<FieldSampler> sampler = map.sampler(box);
+    int both_valid = 0, both_invalid = 0;
+    for (float x = -2.0f; x < 42.0f; x += 0.61f) {
+      for (float y = -1.0f; y < 25.0f; y += 0.93f) {
+        for (float z = -6.0f; z < 30.0f; z += 1.07f) {
+          const Eigen::Vector3f p = map.position(0, 0, 0) + map.voxelSize() * Eigen::Vector3f(x, y, z);
+          FieldSample a, b;
+          const bool in_map = map.sample(p, &a), in_sampler = sampler->sample(p, &b);
+          ASSERT_EQ(in_map, in_sampler) << "at lattice " << x << " " << y << " " << z;
+          if (!in_map) {
+            ++both_invalid;
+            continue;
+          }
+          ++both_valid;
+          EXPECT_EQ(a.distance_m, b.distance_m);
+          EXPECT_EQ(a.gradient, b.gradient);
+        }
+      }
+    }
+    EXPECT_GT(both_valid, 5000);
+    EXPECT_GT(both_invalid, 5000);
+  }
+  // The default sampler of a dense grid reads through the grid itself.
+  const TsdfVolume dense = toDenseVolume(map);
+  FieldSample a, b;
+  const Eigen::Vector3f p = map.position(10, 10, 10) + Eigen::Vector3f::Constant(0.3f * map.voxelSize());
+  ASSERT_TRUE(dense.sample(p, &a));
+  ASSERT_TRUE(dense.sampler(region)->sample(p, &b));
+  EXPECT_EQ(a.distance_m, b.distance_m);
 }
 
 /// Frames of the synthetic room along the desk path, fused into a dense grid and a sparse map on
@@ -260,7 +347,7 @@ TEST(SparseMap, ASavedMapIsTrackedAfterLoadingAsBeforeSaving) {
   SdfPipeline session(preset("default").pipeline);
   session.setMap(io::readMap(path));
   EXPECT_EQ(session.map().type(), MapType::kSparse) << "the file's storage replaces the configured one";
-  EXPECT_EQ(session.map().memoryBytes(), mapper.map().memoryBytes());
+  EXPECT_EQ(session.map().voxelCount(), mapper.map().voxelCount()) << "every block loaded";
   double worst_m = 0.0;
   for (int i = 0; i < 45; i += 3) {
     const FrameReport report = session.processFrame(noisyDeskFrame(camera, i), camera, i / 30.0);

@@ -5,11 +5,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
-#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "sdf_tracker/core/block_table.h"
 #include "sdf_tracker/core/tsdf_map.h"
 #include "sdf_tracker/core/tsdf_volume.h"
 
@@ -19,8 +19,9 @@ namespace sdf_tracker {
 constexpr int kBlockSide = 8;
 constexpr int kBlockVoxels = kBlockSide * kBlockSide * kBlockSide;
 
-/// A cube of kBlockSide^3 voxels, x fastest, then y, then z.
-struct VoxelBlock {
+/// A cube of kBlockSide^3 voxels, x fastest, then y, then z. Cache-line aligned, so a row of
+/// voxels along x is one line and a trilinear sample inside the block reads at most four.
+struct alignas(64) VoxelBlock {
   std::array<Voxel, kBlockVoxels> voxels;
   /// The map's revision when a voxel of this block last changed (see SparseTsdfMap::revision()).
   uint64_t changed_at = 0;
@@ -41,8 +42,8 @@ class SparseTsdfMap : public TsdfMap {
   /// Throws std::invalid_argument naming every violation of the config (whose type it sets to
   /// sparse; dims are not read).
   explicit SparseTsdfMap(const VolumeConfig& config);
-  SparseTsdfMap(const SparseTsdfMap& other);
-  SparseTsdfMap& operator=(const SparseTsdfMap& other);
+  SparseTsdfMap(const SparseTsdfMap&) = default;
+  SparseTsdfMap& operator=(const SparseTsdfMap&) = default;
   SparseTsdfMap(SparseTsdfMap&&) = default;
   SparseTsdfMap& operator=(SparseTsdfMap&&) = default;
 
@@ -85,8 +86,10 @@ class SparseTsdfMap : public TsdfMap {
   /// Block edge length [m].
   float blockSize() const { return kBlockSide * voxelSize(); }
 
-  const VoxelBlock* find(const BlockIndex& block) const;
-  VoxelBlock* find(const BlockIndex& block);
+  const VoxelBlock* find(const BlockIndex& block) const {
+    return inKeyRange(block) ? blocks_.find(keyOf(block)) : nullptr;
+  }
+  VoxelBlock* find(const BlockIndex& block) { return inKeyRange(block) ? blocks_.find(keyOf(block)) : nullptr; }
   /// The block, added with every voxel unobserved if it did not exist.
   VoxelBlock& allocate(const BlockIndex& block);
   /// Drops the block (its voxels become unobserved); nothing when it does not exist.
@@ -95,11 +98,38 @@ class SparseTsdfMap : public TsdfMap {
   /// Calls fn(index, block) for every block, in no particular order.
   template <typename Fn>
   void forEachBlock(Fn&& fn) {
-    for (auto& [key, block] : blocks_) fn(indexOf(key), *block);
+    blocks_.forEach([&fn](uint64_t key, VoxelBlock& block) { fn(indexOf(key), block); });
   }
   template <typename Fn>
   void forEachBlock(Fn&& fn) const {
-    for (const auto& [key, block] : blocks_) fn(indexOf(key), static_cast<const VoxelBlock&>(*block));
+    blocks_.forEach([&fn](uint64_t key, const VoxelBlock& block) { fn(indexOf(key), block); });
+  }
+  /// Calls fn(index, block) for every block with first <= index <= last on each axis, in no
+  /// particular order, at the cost of the smaller of the box and the map: a box much smaller than
+  /// the map costs the same however large the map grows.
+  template <typename Fn>
+  void forEachBlockIn(const BlockIndex& first, const BlockIndex& last, Fn&& fn) const {
+    if ((last.array() < first.array()).any()) return;
+    const Eigen::Vector3d dims = (last - first + BlockIndex::Ones()).cast<double>();
+    if (dims.prod() > static_cast<double>(blocks_.size())) {
+      forEachBlock([&](const BlockIndex& index, const VoxelBlock& block) {
+        if ((index.array() >= first.array()).all() && (index.array() <= last.array()).all()) fn(index, block);
+      });
+      return;
+    }
+    for (int z = first.z(); z <= last.z(); ++z) {
+      for (int y = first.y(); y <= last.y(); ++y) {
+        for (int x = first.x(); x <= last.x(); ++x) {
+          if (const VoxelBlock* block = find(BlockIndex(x, y, z))) fn(BlockIndex(x, y, z), *block);
+        }
+      }
+    }
+  }
+  template <typename Fn>
+  void forEachBlockIn(const BlockIndex& first, const BlockIndex& last, Fn&& fn) {
+    static_cast<const SparseTsdfMap*>(this)->forEachBlockIn(first, last, [&fn](const BlockIndex& index, const VoxelBlock& block) {
+      fn(index, const_cast<VoxelBlock&>(block));
+    });
   }
   /// Every block's index, in a fixed (sorted) order.
   std::vector<BlockIndex> blockIndices() const;
@@ -127,6 +157,9 @@ class SparseTsdfMap : public TsdfMap {
   void copyBlocksFrom(const SparseTsdfMap& source, const std::vector<BlockIndex>& blocks);
 
   bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override;
+  /// Indexes the blocks that hold region_W in a flat array first, so samples there need no hash
+  /// lookup (about a block's table probe per sample saved).
+  std::unique_ptr<FieldSampler> sampler(const Eigen::AlignedBox3f& region_W) const override;
   void clear() override;
   size_t voxelCount() const override { return blocks_.size() * kBlockVoxels; }
   size_t memoryBytes() const override;
@@ -139,11 +172,12 @@ class SparseTsdfMap : public TsdfMap {
   static constexpr int kLocalMask = kBlockSide - 1;
   static_assert(kBlockSide == 1 << kBlockShift, "kBlockSide must be 2^kBlockShift");
 
-  struct KeyHash {
-    size_t operator()(uint64_t key) const { return static_cast<size_t>((key ^ (key >> 29)) * 0x9E3779B97F4A7C15ull >> 16); }
-  };
+  class RegionSampler;
+  /// sample() with the blocks found through findBlock(BlockIndex) -> const VoxelBlock*.
+  template <typename FindBlock>
+  bool sampleVia(const Eigen::Vector3f& p_W, FieldSample* out, const FindBlock& findBlock) const;
 
-  std::unordered_map<uint64_t, std::unique_ptr<VoxelBlock>, KeyHash> blocks_;
+  BlockTable<VoxelBlock> blocks_;
   uint64_t revision_ = 0;
   uint64_t cleared_at_ = 0;
 };

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 namespace sdf_tracker {
 
@@ -59,6 +60,16 @@ struct FieldSample {
   Eigen::Vector3f gradient;  ///< d(distance)/d(position), per metre of world.
 };
 
+/// Samples one map many times over one region of space: what a loop over a frame's points uses
+/// (see TsdfMap::sampler()). Valid while its map is neither changed nor destroyed; concurrent
+/// reads are safe.
+class FieldSampler {
+ public:
+  virtual ~FieldSampler() = default;
+  /// As TsdfMap::sample(), with the same result.
+  virtual bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const = 0;
+};
+
 /// A truncated signed distance field on a lattice, whatever its storage: what tracking, ray
 /// casting and surface normals read. Concurrent reads are safe.
 class TsdfMap {
@@ -86,6 +97,11 @@ class TsdfMap {
     *distance_m = s.distance_m;
     return true;
   }
+
+  /// A sampler prepared for points in region_W: as fast as the storage allows there (a sparse map
+  /// indexes the region's blocks directly instead of hashing per sample); points outside it still
+  /// sample correctly, only slower. The map must outlive it and stay unchanged while it is used.
+  virtual std::unique_ptr<FieldSampler> sampler(const Eigen::AlignedBox3f& region_W) const;
 
   /// Forgets everything: every voxel back to (Dmax, 0).
   virtual void clear() = 0;
