@@ -145,14 +145,6 @@ TriangleMesh weld(const std::vector<std::vector<EdgeVertex>>& pieces, const Tsdf
   return mesh;
 }
 
-/// Appends `part` to `mesh`.
-void append(const TriangleMesh& part, TriangleMesh* mesh) {
-  const int offset = static_cast<int>(mesh->vertices_W.size());
-  mesh->vertices_W.insert(mesh->vertices_W.end(), part.vertices_W.begin(), part.vertices_W.end());
-  mesh->normals_W.insert(mesh->normals_W.end(), part.normals_W.begin(), part.normals_W.end());
-  for (const Eigen::Vector3i& t : part.triangles) mesh->triangles.push_back(t + Eigen::Vector3i::Constant(offset));
-}
-
 /// A block and the first layer of its +x, +y and +z neighbours as a (kBlockSide + 1)^3 dense grid
 /// at the block's place: every cell and edge that starts in the block lies inside it.
 TsdfVolume paddedBlock(const SparseTsdfMap& map, const SparseTsdfMap::BlockIndex& index) {
@@ -228,8 +220,15 @@ TriangleMesh extractMesh(const TsdfMap& map) {
 #pragma omp parallel for schedule(dynamic, 8)
   for (size_t b = 0; b < blocks.size(); ++b) parts[b] = extractBlockMesh(sparse, blocks[b]);
   TriangleMesh mesh;
-  for (const TriangleMesh& part : parts) append(part, &mesh);
+  for (const TriangleMesh& part : parts) appendMesh(part, &mesh);
   return mesh;
+}
+
+void appendMesh(const TriangleMesh& part, TriangleMesh* mesh) {
+  const int offset = static_cast<int>(mesh->vertices_W.size());
+  mesh->vertices_W.insert(mesh->vertices_W.end(), part.vertices_W.begin(), part.vertices_W.end());
+  mesh->normals_W.insert(mesh->normals_W.end(), part.normals_W.begin(), part.normals_W.end());
+  for (const Eigen::Vector3i& t : part.triangles) mesh->triangles.push_back(t + Eigen::Vector3i::Constant(offset));
 }
 
 TriangleMesh extractBlockMesh(const SparseTsdfMap& map, const SparseTsdfMap::BlockIndex& block) {

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <visualization_msgs/Marker.h>
+#include <visualization_msgs/MarkerArray.h>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -86,6 +87,9 @@ MapPublisher::MapPublisher(ros::NodeHandle pnh, std::mutex& map_mutex,
       mesh_period_s_(mesh_rate_hz > 0.0 ? 1.0 / mesh_rate_hz : 0.0) {
   cloud_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("cloud", 1, true);
   mesh_pub_ = pnh.advertise<visualization_msgs::Marker>("mesh", 1, true);
+  // Not latched: each message holds only what changed; a new subscriber is sent everything.
+  mesh_blocks_pub_ = pnh.advertise<visualization_msgs::MarkerArray>(
+      "mesh_blocks", 1, [this](const ros::SingleSubscriberPublisher&) { resend_mesh_blocks_ = true; });
   if (cloud_period_s_ > 0.0 || mesh_period_s_ > 0.0) thread_ = std::thread(&MapPublisher::run, this);
 }
 
@@ -118,9 +122,10 @@ void MapPublisher::run() {
     const Clock::time_point now = Clock::now();
     const bool cloud_due = now >= next_cloud && cloud_pub_.getNumSubscribers() > 0;
     const bool mesh_due = now >= next_mesh && mesh_pub_.getNumSubscribers() > 0;
+    const bool mesh_blocks_due = now >= next_mesh && mesh_blocks_pub_.getNumSubscribers() > 0;
     if (now >= next_cloud) next_cloud = now + periodOf(cloud_period_s_);
     if (now >= next_mesh) next_mesh = now + periodOf(mesh_period_s_);
-    if (!cloud_due && !mesh_due) continue;
+    if (!cloud_due && !mesh_due && !mesh_blocks_due) continue;
     const st::TsdfMap* map = snapshot_.update();
     if (!map) continue;
     std_msgs::Header header;
@@ -129,7 +134,46 @@ void MapPublisher::run() {
     const Eigen::Isometry3d T_map_W = T_map_W_();
     if (cloud_due) cloud_pub_.publish(toCloudMsg(st::extractSurfaceCloud(*map), header, T_map_W));
     if (mesh_due) mesh_pub_.publish(toMarker(st::extractMesh(*map), header, T_map_W));
+    if (mesh_blocks_due) publishMeshBlocks(*map, header, T_map_W);
   }
+}
+
+void MapPublisher::publishMeshBlocks(const st::TsdfMap& map, const std_msgs::Header& header,
+                                     const Eigen::Isometry3d& T_map_W) {
+  visualization_msgs::MarkerArray array;
+  auto clearAll = [&] {
+    visualization_msgs::Marker clear;
+    clear.header = header;
+    clear.ns = "mesh_blocks";
+    clear.action = visualization_msgs::Marker::DELETEALL;
+    array.markers.push_back(clear);
+    chunk_marker_ids_.clear();
+  };
+  auto chunkMarker = [&](const st::TriangleMesh& mesh, int id) {
+    visualization_msgs::Marker marker = toMarker(mesh, header, T_map_W);
+    marker.ns = "mesh_blocks";
+    marker.id = id;
+    if (mesh.triangles.empty()) marker.action = visualization_msgs::Marker::DELETE;
+    array.markers.push_back(std::move(marker));
+  };
+  if (map.type() == st::MapType::kDense) {
+    // One marker of the whole mesh; the chunks of a sparse map shown before go.
+    resend_mesh_blocks_ = false;
+    if (!chunk_marker_ids_.empty()) clearAll();
+    chunkMarker(st::extractMesh(map), 0);
+  } else {
+    const bool everything = resend_mesh_blocks_.exchange(false) || T_map_W.matrix() != mesh_blocks_T_map_W_.matrix();
+    mesh_blocks_T_map_W_ = T_map_W;
+    const auto& sparse = static_cast<const st::SparseTsdfMap&>(map);
+    const std::vector<st::ChunkedMesher::Chunk> chunks = mesher_.update(sparse, snapshot_.syncedRevision(), everything);
+    if (mesher_.restarted()) clearAll();
+    for (const st::ChunkedMesher::Chunk& chunk : chunks) {
+      const int next_id = static_cast<int>(chunk_marker_ids_.size()) + 1;  // 0 is the dense grid's
+      const auto id = chunk_marker_ids_.emplace(st::SparseTsdfMap::keyOf(chunk.index), next_id);
+      chunkMarker(chunk.mesh, id.first->second);
+    }
+  }
+  if (!array.markers.empty()) mesh_blocks_pub_.publish(array);
 }
 
 }  // namespace sdf_tracker_ros

@@ -27,6 +27,7 @@
 #include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
+#include <visualization_msgs/MarkerArray.h>
 
 #include "sdf_tracker/SavePath.h"
 #include "sdf_tracker/TrackingStatus.h"
@@ -249,6 +250,89 @@ TEST_F(NodeTest, AMapSavedBySaveVolumeIsTrackedInAfterLoadVolume) {
   ASSERT_TRUE(ros::service::call("sdf_tracker/load_volume", load));
   EXPECT_FALSE(load.response.success);
   EXPECT_NE(load.response.message.find(load.request.path), std::string::npos) << load.response.message;
+}
+
+/// Collects ~mesh_blocks messages from its own subscription.
+class MeshBlocksListener {
+ public:
+  explicit MeshBlocksListener(ros::NodeHandle& nh)
+      : sub_(nh.subscribe("sdf_tracker/mesh_blocks", 10, &MeshBlocksListener::onArray, this)) {}
+  /// The next message that arrives after this call (nullopt after `timeout_s`).
+  std::optional<visualization_msgs::MarkerArray> next(double timeout_s = 10.0) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    const size_t before = arrays_.size();
+    if (!arrived_.wait_for(lock, std::chrono::duration<double>(timeout_s), [&] { return arrays_.size() > before; })) {
+      return std::nullopt;
+    }
+    return arrays_.back();
+  }
+
+ private:
+  void onArray(const visualization_msgs::MarkerArray& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    arrays_.push_back(msg);
+    arrived_.notify_all();
+  }
+  std::mutex mutex_;
+  std::condition_variable arrived_;
+  std::vector<visualization_msgs::MarkerArray> arrays_;
+  ros::Subscriber sub_;
+};
+
+/// Markers that add triangles, and whether the array starts by clearing what was shown.
+std::pair<size_t, bool> chunkMarkers(const visualization_msgs::MarkerArray& array) {
+  size_t added = 0;
+  for (const auto& marker : array.markers) added += marker.action == visualization_msgs::Marker::ADD;
+  return {added, !array.markers.empty() && array.markers.front().action == visualization_msgs::Marker::DELETEALL};
+}
+
+TEST_F(NodeTest, MeshBlocksSendsANewViewerEverythingAndThenOnlyTheChunksThatChanged) {
+  ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
+  for (int i = 0; i < 3; ++i) publishDeskFrame(700.0 + i / 30.0, i / 30.0);
+  MeshBlocksListener viewer(nh_);
+  ASSERT_TRUE(viewer.next()) << "nothing on ~mesh_blocks";
+
+  // The map as blocks (whichever storage it had, an earlier test may have loaded one): the
+  // viewer is told to start over and gets every chunk.
+  sdf_tracker::SavePath path;
+  path.request.path = "/tmp/sdf_tracker_node_test_chunks.sdfmap";
+  ASSERT_TRUE(ros::service::call("sdf_tracker/save_volume", path));
+  ASSERT_TRUE(ros::service::call("sdf_tracker/load_volume", path));
+  ASSERT_TRUE(path.response.success) << path.response.message;
+  std::optional<visualization_msgs::MarkerArray> all;
+  for (int tries = 0; tries < 3 && !(all && chunkMarkers(*all).second); ++tries) all = viewer.next();
+  ASSERT_TRUE(all && chunkMarkers(*all).second) << "no array starting over after the load";
+  const size_t all_chunks = chunkMarkers(*all).first;
+  EXPECT_GT(all_chunks, 5u);
+
+  // A frame that measures one quadrant of the image changes part of the map: only the chunks it
+  // changed are sent.
+  sensor_msgs::Image patch = deskFrame(710.0, 3 / 30.0);
+  {
+    st::DepthImage depth = sdf_tracker_ros::toDepthImage(patch);
+    for (int v = 0; v < depth.height(); ++v) {
+      for (int u = 0; u < depth.width(); ++u) {
+        if (u > depth.width() / 2 || v < depth.height() / 2) depth.at(u, v) = 0.0f;
+      }
+    }
+    patch = sdf_tracker_ros::toImageMsg(depth, patch.header);
+  }
+  const auto patch_status = publishAndWait(patch, kQvga);
+  EXPECT_EQ(patch_status.status, sdf_tracker::TrackingStatus::OK) << patch_status.status_text;
+  std::optional<visualization_msgs::MarkerArray> changed;
+  for (int tries = 0; tries < 3 && !(changed && chunkMarkers(*changed).first > 0); ++tries) changed = viewer.next();
+  ASSERT_TRUE(changed) << "no chunks sent after the patch was fused";
+  EXPECT_FALSE(chunkMarkers(*changed).second) << "an update does not start over";
+  EXPECT_GT(chunkMarkers(*changed).first, 0u);
+  EXPECT_LT(chunkMarkers(*changed).first, all_chunks / 2);
+
+  // A second viewer joins (another process: one process shares one connection per topic): it is
+  // sent everything, and so, in the same message, is the first.
+  ASSERT_EQ(std::system("timeout 20 rostopic echo -n 1 /sdf_tracker/mesh_blocks > /dev/null 2>&1 &"), 0);
+  std::optional<visualization_msgs::MarkerArray> joined;
+  for (int tries = 0; tries < 5 && !(joined && chunkMarkers(*joined).second); ++tries) joined = viewer.next();
+  ASSERT_TRUE(joined && chunkMarkers(*joined).second) << "no array starting over for the new viewer";
+  EXPECT_GE(chunkMarkers(*joined).first, all_chunks);
 }
 
 TEST_F(NodeTest, AFrameFromThePastIsDroppedWithoutWipingTheMap) {

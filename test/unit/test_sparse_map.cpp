@@ -9,6 +9,7 @@
 #include <random>
 
 #include "sdf_tracker/core/block_table.h"
+#include "sdf_tracker/core/chunked_mesh.h"
 #include "sdf_tracker/core/integrator.h"
 #include "sdf_tracker/core/io.h"
 #include "sdf_tracker/core/parameters.h"
@@ -266,6 +267,92 @@ TEST_F(FusionFixture, SurfacesMatchTheDenseGrids) {
   size_t triangles = 0;
   for (const BlockIndex& b_index : sparse.blockIndices()) triangles += extractBlockMesh(sparse, b_index).triangles.size();
   EXPECT_EQ(triangles, mesh_b.triangles.size());
+}
+
+TEST_F(FusionFixture, TheChunkedMeshFollowsTheMapSendingOnlyWhatChanged) {
+  ChunkedMesher mesher;
+  std::map<uint64_t, size_t> shown;  // chunk key -> triangles, as a viewer would hold them
+  auto apply = [&shown](const std::vector<ChunkedMesher::Chunk>& chunks) {
+    for (const ChunkedMesher::Chunk& chunk : chunks) {
+      const uint64_t key = SparseTsdfMap::keyOf(chunk.index);
+      if (chunk.mesh.triangles.empty()) {
+        EXPECT_EQ(shown.erase(key), 1u) << "an empty chunk is sent only to take away what was shown";
+      } else {
+        shown[key] = chunk.mesh.triangles.size();
+      }
+    }
+  };
+  auto shownTriangles = [&shown] {
+    size_t n = 0;
+    for (const auto& entry : shown) n += entry.second;
+    return n;
+  };
+  apply(mesher.update(sparse, sparse.revision()));
+  EXPECT_TRUE(mesher.restarted()) << "the first update meshes everything";
+  EXPECT_GT(shown.size(), 20u);
+  EXPECT_EQ(shownTriangles(), extractMesh(sparse).triangles.size());
+  const size_t all_chunks = shown.size();
+
+  EXPECT_TRUE(mesher.update(sparse, sparse.revision()).empty()) << "nothing changed, nothing sent";
+  EXPECT_FALSE(mesher.restarted());
+
+  // A frame that measures only a small patch changes a small part of the map: the chunks sent
+  // are a few of all, and the viewer's mesh is again the map's.
+  const Integrator integrator(IntegratorConfig{});
+  const Eigen::Isometry3d pose = synthetic::cameraPose(synthetic::Motion::kDesk, 4.0, 10.0);
+  DepthImage patch = test::renderRoom(pose, camera);
+  for (int v = 0; v < patch.height(); ++v) {
+    for (int u = 0; u < patch.width(); ++u) {
+      if (std::abs(u - patch.width() / 2) > 30 || std::abs(v - patch.height() / 2) > 30) patch.at(u, v) = 0.0f;
+    }
+  }
+  integrator.integrate(patch, camera, pose, &sparse);
+  const std::vector<ChunkedMesher::Chunk> changed = mesher.update(sparse, sparse.revision());
+  EXPECT_FALSE(mesher.restarted());
+  EXPECT_GT(changed.size(), 0u);
+  EXPECT_LT(changed.size(), all_chunks / 4);
+  apply(changed);
+  EXPECT_EQ(shownTriangles(), extractMesh(sparse).triangles.size());
+  // Chunk by chunk, what the viewer holds is what meshing the map afresh gives.
+  std::map<uint64_t, size_t> expected;
+  for (const ChunkedMesher::Chunk& chunk : ChunkedMesher().update(sparse, sparse.revision())) {
+    expected[SparseTsdfMap::keyOf(chunk.index)] = chunk.mesh.triangles.size();
+  }
+  EXPECT_EQ(shown, expected);
+
+  // A change in the first voxel layer of a block at a chunk's lower x face moves triangles of
+  // the chunk below: that chunk is sent too.
+  BlockIndex moved(0, 0, 0);
+  bool found = false;
+  for (const BlockIndex& b : sparse.blockIndices()) {
+    const BlockIndex below = b - BlockIndex(1, 0, 0);
+    if (ChunkedMesher::chunkOf(b) != ChunkedMesher::chunkOf(below) && sparse.find(below) &&
+        !extractBlockMesh(sparse, below).triangles.empty()) {
+      moved = b;
+      found = true;
+      break;
+    }
+  }
+  ASSERT_TRUE(found);
+  VoxelBlock& block = *sparse.find(moved);
+  for (int z = 0; z < kBlockSide; ++z) {
+    for (int y = 0; y < kBlockSide; ++y) block.voxels[VoxelBlock::index(0, y, z)] = Voxel{-0.01f, 1.0f};
+  }
+  block.changed_at = sparse.beginRevision();
+  const std::vector<ChunkedMesher::Chunk> layer = mesher.update(sparse, sparse.revision());
+  EXPECT_TRUE(std::any_of(layer.begin(), layer.end(), [&](const ChunkedMesher::Chunk& chunk) {
+    return chunk.index == ChunkedMesher::chunkOf(moved - BlockIndex(1, 0, 0));
+  }));
+  apply(layer);
+  expected.clear();
+  for (const ChunkedMesher::Chunk& chunk : ChunkedMesher().update(sparse, sparse.revision())) {
+    expected[SparseTsdfMap::keyOf(chunk.index)] = chunk.mesh.triangles.size();
+  }
+  EXPECT_EQ(shown, expected);
+
+  sparse.clear();
+  EXPECT_TRUE(mesher.update(sparse, sparse.revision()).empty());
+  EXPECT_TRUE(mesher.restarted()) << "a cleared map starts the viewer over";
 }
 
 TEST_F(FusionFixture, ADenseRegionAndALiveCopyHoldTheSameVoxels) {

@@ -37,4 +37,7 @@ TriangleMesh extractMesh(const TsdfMap& map);
 /// not exist): the pieces extractMesh joins.
 TriangleMesh extractBlockMesh(const SparseTsdfMap& map, const SparseTsdfMap::BlockIndex& block);
 
+/// Appends `part` to `mesh` (its triangles re-indexed; vertices are not welded across them).
+void appendMesh(const TriangleMesh& part, TriangleMesh* mesh);
+
 }  // namespace sdf_tracker

@@ -6,10 +6,13 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <unordered_map>
 
 #include <Eigen/Geometry>
 #include <ros/ros.h>
+#include <std_msgs/Header.h>
 
+#include "sdf_tracker/core/chunked_mesh.h"
 #include "sdf_tracker/core/tsdf_map.h"
 
 namespace sdf_tracker_ros {
@@ -25,6 +28,8 @@ class MapSnapshot {
   /// since the last update. Pieces may come from consecutive frames (as a screen refresh would);
   /// each voxel is consistent. Returns the copy, or nullptr when there is no map.
   const sdf_tracker::TsdfMap* update(int slabs_per_lock = 8, int blocks_per_lock = 256);
+  /// Sparse: the copy holds every change of the live map up to this revision of it.
+  uint64_t syncedRevision() const { return synced_revision_; }
 
  private:
   /// Copies the whole live map when there is no copy or it can no longer be brought up to date
@@ -37,9 +42,10 @@ class MapSnapshot {
   uint64_t synced_revision_ = 0;  ///< sparse: the live map's revision the copy holds
 };
 
-/// Publishes the map as ~cloud and ~mesh from a snapshot on its own low-priority thread, each at
-/// its rate and only while someone subscribes: map extraction never blocks tracking and takes
-/// only what CPU the tracker leaves.
+/// Publishes the map as ~cloud, ~mesh and ~mesh_blocks from a snapshot on its own low-priority
+/// thread, each at its rate and only while someone subscribes: map extraction never blocks
+/// tracking and takes only what CPU the tracker leaves. ~mesh_blocks sends a sparse map's mesh in
+/// chunks, only those that changed (everything again to a new subscriber); a dense grid's as one.
 class MapPublisher {
  public:
   /// `T_map_W` gives the map frame's pose in the tracker's world, `stamp` the latest frame's stamp.
@@ -50,8 +56,11 @@ class MapPublisher {
 
  private:
   void run();
+  /// ~mesh_blocks: the chunks that changed since the last call (all after a restart).
+  void publishMeshBlocks(const sdf_tracker::TsdfMap& map, const std_msgs::Header& header,
+                         const Eigen::Isometry3d& T_map_W);
 
-  ros::Publisher cloud_pub_, mesh_pub_;
+  ros::Publisher cloud_pub_, mesh_pub_, mesh_blocks_pub_;
   MapSnapshot snapshot_;
   std::function<Eigen::Isometry3d()> T_map_W_;
   std::function<ros::Time()> stamp_;
@@ -60,6 +69,10 @@ class MapPublisher {
   std::mutex wake_mutex_;
   std::condition_variable wake_;
   bool stopping_ = false;
+  std::atomic<bool> resend_mesh_blocks_{true};  ///< a new subscriber needs every chunk
+  sdf_tracker::ChunkedMesher mesher_;
+  std::unordered_map<uint64_t, int> chunk_marker_ids_;  ///< chunk key -> marker id
+  Eigen::Isometry3d mesh_blocks_T_map_W_ = Eigen::Isometry3d::Identity();
   std::thread thread_;
 };
 
