@@ -7,6 +7,7 @@ get_filename_component(SDF_TRACKER_ROOT "${CMAKE_CURRENT_LIST_DIR}/.." ABSOLUTE)
 
 # The ROS-free core: Eigen, OpenMP, and OpenCV for image files only.
 add_library(sdf_tracker_core
+  ${SDF_TRACKER_ROOT}/src/core/block_swap.cpp
   ${SDF_TRACKER_ROOT}/src/core/camera.cpp
   ${SDF_TRACKER_ROOT}/src/core/chunked_mesh.cpp
   ${SDF_TRACKER_ROOT}/src/core/depth_undistortion.cpp

@@ -123,4 +123,12 @@ LensDistortion PinholeCamera::unstatedDistortion(const PinholeCamera& camera, do
   return *published;
 }
 
+Eigen::AlignedBox3f PinholeCamera::viewBox(const Eigen::Isometry3f& T_W_C, float z_far_m) const {
+  Eigen::AlignedBox3f box(T_W_C.translation());
+  for (const float u : {-0.5f, width - 0.5f}) {
+    for (const float v : {-0.5f, height - 0.5f}) box.extend(T_W_C * backProject(u, v, z_far_m));
+  }
+  return box;
+}
+
 }  // namespace sdf_tracker

@@ -4,8 +4,7 @@
 
 namespace sdf_tracker {
 
-std::vector<ChunkedMesher::Chunk> ChunkedMesher::update(const SparseTsdfMap& map, uint64_t revision,
-                                                        bool everything) {
+std::vector<ChunkedMesher::Chunk> ChunkedMesher::update(const SparseTsdfMap& map, uint64_t revision, bool everything) {
   restarted_ = everything || map.identity() != map_identity_ || map.clearedAt() > meshed_revision_;
   std::vector<uint64_t> dirty;  // chunk keys
   if (restarted_) {

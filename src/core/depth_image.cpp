@@ -9,6 +9,14 @@ int DepthImage::countMeasurements() const {
   return static_cast<int>(std::count_if(data_m_.begin(), data_m_.end(), isMeasurement));
 }
 
+float DepthImage::maxMeasurement() const {
+  float furthest = 0.0f;
+  for (const float z : data_m_) {
+    if (isMeasurement(z)) furthest = std::max(furthest, z);
+  }
+  return furthest;
+}
+
 DepthImage DepthImage::fromRaw16(const uint16_t* raw, int width, int height, double depth_factor) {
   DepthImage image(width, height);
   const float scale = static_cast<float>(1.0 / depth_factor);

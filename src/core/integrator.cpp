@@ -92,16 +92,6 @@ class VoxelFusion {
   float reference_sigma_;
 };
 
-/// The furthest measured depth; 0 when there is none.
-float maxMeasuredDepth(const DepthImage& depth) {
-  float max_depth_m = 0.0f;
-  const float* z = depth.data();
-  for (size_t n = 0; n < static_cast<size_t>(depth.width()) * depth.height(); ++n) {
-    if (DepthImage::isMeasurement(z[n])) max_depth_m = std::max(max_depth_m, z[n]);
-  }
-  return max_depth_m;
-}
-
 /// The dense grid: each row of voxels is clipped to the viewing frustum, then fused voxel by voxel.
 size_t integrateDense(const VoxelFusion& fusion, const PinholeCamera& camera, const Eigen::Isometry3f& T_C_W,
                       double z_far, TsdfVolume* volume) {
@@ -208,26 +198,6 @@ class Frustum {
     normals_[1] = Eigen::Vector3f(-fx, 0.0f, camera.width - 0.5f - cx).normalized();
     normals_[2] = Eigen::Vector3f(0.0f, fy, cy + 0.5f).normalized();
     normals_[3] = Eigen::Vector3f(0.0f, -fy, camera.height - 0.5f - cy).normalized();
-    const float left = -0.5f, right = camera.width - 0.5f, top = -0.5f, bottom = camera.height - 0.5f;
-    far_corners_ = {Eigen::Vector3f((left - cx) / fx, (top - cy) / fy, 1.0f) * z_far,
-                    Eigen::Vector3f((right - cx) / fx, (top - cy) / fy, 1.0f) * z_far,
-                    Eigen::Vector3f((left - cx) / fx, (bottom - cy) / fy, 1.0f) * z_far,
-                    Eigen::Vector3f((right - cx) / fx, (bottom - cy) / fy, 1.0f) * z_far};
-  }
-  /// The box of block indices that holds the frustum seen from T_W_C (empty when it leaves the
-  /// map's reach).
-  void blockBox(const Eigen::Isometry3f& T_W_C, const SparseTsdfMap& map, Eigen::Vector3i* first,
-                Eigen::Vector3i* last) const {
-    Eigen::AlignedBox3f box_W(T_W_C.translation());
-    for (const Eigen::Vector3f& corner_C : far_corners_) box_W.extend(T_W_C * corner_C);
-    const Eigen::Vector3f lo = map.toLattice(box_W.min()), hi = map.toLattice(box_W.max());
-    if (!SparseTsdfMap::withinReach(lo) || !SparseTsdfMap::withinReach(hi)) {
-      *first = Eigen::Vector3i::Zero();
-      *last = -Eigen::Vector3i::Ones();
-      return;
-    }
-    *first = SparseTsdfMap::blockContaining(lo);
-    *last = SparseTsdfMap::blockContaining(hi);
   }
   /// Whether any part of the sphere (centre in the camera frame) can lie inside.
   bool mayHoldSphere(const Eigen::Vector3f& c_C, float radius) const {
@@ -240,7 +210,6 @@ class Frustum {
 
  private:
   std::array<Eigen::Vector3f, 4> normals_;
-  std::array<Eigen::Vector3f, 4> far_corners_;  ///< the image's corners at z_far (camera frame)
   float z_far_;
 };
 
@@ -263,8 +232,10 @@ size_t integrateSparse(const VoxelFusion& fusion, const DepthImage& depth, const
   const Eigen::Vector3f centre_offset_C =
       T_C_W.linear() * Eigen::Vector3f::Constant(0.5f * (kBlockSide - 1) * map->voxelSize());
   std::vector<std::pair<Eigen::Vector3f, VoxelBlock*>> visible;  // first voxel's centre in the camera frame
-  Eigen::Vector3i first_block, last_block;
-  frustum.blockBox(T_W_C_f, *map, &first_block, &last_block);
+  // No block at all when the view leaves the map's reach.
+  SparseTsdfMap::BlockIndex first_block = SparseTsdfMap::BlockIndex::Zero();
+  SparseTsdfMap::BlockIndex last_block = -SparseTsdfMap::BlockIndex::Ones();
+  map->blockRange(camera.viewBox(T_W_C_f, z_far), &first_block, &last_block);
   map->forEachBlockIn(first_block, last_block, [&](const SparseTsdfMap::BlockIndex& index, VoxelBlock& block) {
     const Eigen::Vector3f first_C = T_C_W * map->position(SparseTsdfMap::firstVoxel(index));
     if (frustum.mayHoldSphere(first_C + centre_offset_C, radius)) {
@@ -305,7 +276,7 @@ size_t Integrator::integrate(const DepthImage& depth, const PinholeCamera& camer
     throw std::invalid_argument(mismatch);
   }
   // Beyond the furthest measurement (plus the negative band) every voxel is too far behind.
-  const float max_depth_m = maxMeasuredDepth(depth);
+  const float max_depth_m = depth.maxMeasurement();
   if (max_depth_m <= 0.0f) return 0;
   const double z_far = max_depth_m - config_.negative_truncation_m;
   const VoxelFusion fusion(config_, depth, camera, map->positiveTruncation());

@@ -279,6 +279,17 @@ std::vector<ParameterSpec> buildTable() {
         s.pipeline.volume.type = std::get<std::string>(v) == "sparse" ? MapType::kSparse : MapType::kDense;
       },
       [](const S& s) { return ParameterValue(std::string(toString(s.pipeline.volume.type))); }});
+  t.push_back(bound<double>("MaxMemoryMB", "MiB",
+                            "sparse map: beyond this, blocks far from the camera go to a swap file in SwapDirectory "
+                            "and come back when seen again; 0 no limit",
+                            closed(0.0, 1e7), same(0.0), kAtStart, kAll,
+                            [](auto& s) -> auto& { return s.pipeline.max_map_memory_mb; }));
+  t.push_back(ParameterSpec{
+      "SwapDirectory", ParameterType::kText, "", "where MaxMemoryMB's swap file goes (empty: the system's temporary "
+      "directory); the file has no name and vanishes when the process ends",
+      std::nullopt, {}, nullptr, same(std::string()), kAtStart, kAll,
+      [](S& s, const ParameterValue& v) { s.pipeline.swap_directory = std::get<std::string>(v); },
+      [](const S& s) { return ParameterValue(s.pipeline.swap_directory); }});
   t.push_back(bound<bool>("CompactVoxels", "", "4-byte voxels (half the memory; distance and weight quantised)", {},
                           same(false), kAtStart, kAll, [](auto& s) -> auto& { return s.pipeline.volume.compact_voxels; }));
   t.push_back(bound<int>("MinValidPoints", "", "fewer tracked points than this: too_few_points", closed(6, 1e8),
@@ -359,6 +370,10 @@ std::vector<std::string> Settings::validate() const {
   }
   if (p.volume.compact_voxels && p.volume.type == MapType::kSparse) {
     v.require(false, "CompactVoxels=true applies to MapType=dense only (MapType is sparse)");
+  }
+  if (p.max_map_memory_mb > 0.0 && p.volume.type == MapType::kDense) {
+    v.require(false, "MaxMemoryMB=" + text(p.max_map_memory_mb) +
+                         " applies to MapType=sparse only (the dense grid's memory is fixed by GridSizeX/Y/Z)");
   }
   if (p.volume.compact_voxels && p.integrator.max_weight > VoxelCodec<CompactVoxel>::kMaxWeight) {
     v.require(false, "MaxWeight must be at most " + text(VoxelCodec<CompactVoxel>::kMaxWeight) +

@@ -2,10 +2,12 @@
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
 #include "sdf_tracker/core/se3.h"
+#include "sdf_tracker/core/sparse_tsdf_map.h"
 #include "sdf_tracker/core/tsdf_volume.h"
 #include "sdf_tracker/core/validation.h"
 
@@ -15,6 +17,29 @@ namespace {
 
 double millisecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// What the pipeline may read or write of a sparse map around a view: the box of the view up to
+/// its furthest depth plus the truncation, widened by the motion a frame may still make.
+bool blocksNearView(const SparseTsdfMap& map, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C,
+                    float furthest_m, double max_motion_m, SparseTsdfMap::BlockIndex* first,
+                    SparseTsdfMap::BlockIndex* last) {
+  const Eigen::AlignedBox3f view = camera.viewBox(T_W_C.cast<float>(), furthest_m + map.positiveTruncation());
+  const float margin = static_cast<float>(max_motion_m) + map.blockSize();
+  return map.blockRange(Eigen::AlignedBox3f(view.min().array() - margin, view.max().array() + margin), first, last);
+}
+
+/// The budget for the config, or none.
+std::unique_ptr<MapMemoryBudget> makeBudget(const PipelineConfig& config, MapType type) {
+  if (config.max_map_memory_mb <= 0.0 || type != MapType::kSparse) return nullptr;
+  const std::string directory =
+      config.swap_directory.empty() ? std::filesystem::temp_directory_path().string() : config.swap_directory;
+  try {
+    const size_t bytes = std::max<size_t>(1, static_cast<size_t>(config.max_map_memory_mb * 1048576.0));
+    return std::make_unique<MapMemoryBudget>(bytes, directory);
+  } catch (const std::runtime_error& e) {
+    throw std::invalid_argument(std::string("MaxMemoryMB needs a swap file (SwapDirectory): ") + e.what());
+  }
 }
 
 /// The grid's geometry with its origin placed for the start pose.
@@ -65,12 +90,14 @@ Eigen::Vector3d SdfPipeline::volumeOriginFor(const PipelineConfig& config) {
 SdfPipeline::SdfPipeline(const PipelineConfig& config) : config_(config) {
   throwIfInvalid("pipeline config", config.validate());
   map_ = makeMap(placedVolume(config));
+  budget_ = makeBudget(config, map_->type());
   integrator_ = std::make_unique<Integrator>(config.integrator);
   tracker_ = std::make_unique<Tracker>(config.tracker);
 }
 
 void SdfPipeline::reset() {
   map_->clear();
+  if (budget_) budget_->clear();
   T_W_C_ = T_W_C_last_fused_ = T_W_C_previous_ = Eigen::Isometry3d::Identity();
   map_initialised_ = false;
   consecutive_failures_ = 0;
@@ -81,6 +108,7 @@ void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map) {
   if (!map) throw std::invalid_argument("setMap: no map");
   map_ = std::move(map);
   config_.volume = map_->config();
+  budget_ = makeBudget(config_, map_->type());
   T_W_C_ = T_W_C_last_fused_ = T_W_C_previous_ = Eigen::Isometry3d::Identity();
   map_initialised_ = true;
   consecutive_failures_ = 0;
@@ -90,9 +118,10 @@ void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map) {
 void SdfPipeline::updateConfig(const PipelineConfig& candidate) {
   throwIfInvalid("pipeline config", candidate.validate());
   if (!candidate.volume.sameLattice(config_.volume) ||
-      candidate.initial_camera_in_grid != config_.initial_camera_in_grid) {
+      candidate.initial_camera_in_grid != config_.initial_camera_in_grid ||
+      candidate.max_map_memory_mb != config_.max_map_memory_mb || candidate.swap_directory != config_.swap_directory) {
     throw std::invalid_argument(
-        "the grid (size, cell size, positive truncation, voxel storage, placement) cannot change live");
+        "the grid (size, cell size, positive truncation, voxel storage, placement, memory bound) cannot change live");
   }
   integrator_ = std::make_unique<Integrator>(candidate.integrator);
   tracker_ = std::make_unique<Tracker>(candidate.tracker);
@@ -133,6 +162,37 @@ Eigen::Isometry3d SdfPipeline::predictPose(double timestamp_s) const {
   return T_W_C_ * scaled;
 }
 
+void SdfPipeline::restoreNear(const Eigen::Isometry3d& T_W_C, const PinholeCamera& camera, float furthest_m,
+                              FrameReport* report) {
+  if (!budget_ || budget_->swap().size() == 0) return;
+  auto& sparse = static_cast<SparseTsdfMap&>(*map_);
+  SparseTsdfMap::BlockIndex first, last;
+  if (!blocksNearView(sparse, camera, T_W_C, furthest_m, config_.tracker.max_translation_m, &first, &last)) return;
+  try {
+    report->blocks_swapped_in += budget_->restore(&sparse, first, last);
+  } catch (const std::runtime_error& e) {
+    report->swap_error = e.what();
+  }
+}
+
+void SdfPipeline::evictAwayFrom(const Eigen::Isometry3d& T_W_C, const PinholeCamera& camera, float furthest_m,
+                                FrameReport* report) {
+  if (!budget_) return;
+  auto& sparse = static_cast<SparseTsdfMap&>(*map_);
+  SparseTsdfMap::BlockIndex first, last;
+  if (!blocksNearView(sparse, camera, T_W_C, furthest_m, config_.tracker.max_translation_m, &first, &last)) return;
+  try {
+    report->blocks_swapped_out += budget_->evict(&sparse, first, last, T_W_C.translation().cast<float>());
+  } catch (const std::runtime_error& e) {
+    report->swap_error = e.what();
+  }
+}
+
+std::unique_ptr<TsdfMap> SdfPipeline::copyWholeMap() const {
+  if (!budget_ || budget_->swap().size() == 0) return map_->clone();
+  return std::make_unique<SparseTsdfMap>(budget_->whole(static_cast<const SparseTsdfMap&>(*map_)));
+}
+
 FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s) {
   FrameReport report;
   report.track.T_W_C = T_W_C_;
@@ -151,9 +211,12 @@ FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCame
     return report;
   }
 
+  const float furthest_m = budget_ ? filtered.maxMeasurement() : 0.0f;  // only swapping needs it
+
   if (config_.reset_after_failures > 0 && consecutive_failures_ >= config_.reset_after_failures) {
     const Eigen::Isometry3d held = T_W_C_;
     map_->clear();
+    if (budget_) budget_->clear();
     map_initialised_ = false;
     consecutive_failures_ = 0;
     T_W_C_ = T_W_C_last_fused_ = held;
@@ -169,6 +232,9 @@ FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCame
   } else {
     const auto start = std::chrono::steady_clock::now();
     const Eigen::Isometry3d predicted = predictPose(timestamp_s);
+    // Swapped blocks the frame may see come back first; the held pose's too, for the retry below.
+    restoreNear(predicted, ideal_camera, furthest_m, &report);
+    restoreNear(T_W_C_, ideal_camera, furthest_m, &report);
     report.track = tracker_->track(filtered, ideal_camera, *map_, predicted);
     if (!report.track.tracked() && !predicted.isApprox(T_W_C_)) {
       // The prediction may have led astray (the camera stopped or turned): try from the last pose.
@@ -193,7 +259,10 @@ FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCame
   const double change = std::hypot(motion.translation().norm(), rotationAngle(motion));
   if (report.initialised_map || change >= config_.min_pose_change_to_fuse) {
     const auto start = std::chrono::steady_clock::now();
+    // Fusion must find every block of its view in memory: a swapped one would be made anew.
+    restoreNear(T_W_C_, ideal_camera, furthest_m, &report);
     integrator_->integrate(filtered, ideal_camera, T_W_C_, map_.get());
+    evictAwayFrom(T_W_C_, ideal_camera, furthest_m, &report);
     report.fusion_ms = millisecondsSince(start);
     report.fused = true;
     T_W_C_last_fused_ = T_W_C_;

@@ -145,12 +145,10 @@ bool SparseTsdfMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
 class SparseTsdfMap::RegionSampler final : public FieldSampler {
  public:
   RegionSampler(const SparseTsdfMap& map, const Eigen::AlignedBox3f& region_W) : map_(map) {
-    if (region_W.isEmpty() || !region_W.min().allFinite() || !region_W.max().allFinite()) return;
-    const Eigen::Vector3f lo = map.toLattice(region_W.min()), hi = map.toLattice(region_W.max());
-    if (!withinReach(lo) || !withinReach(hi)) return;
-    // A cell at the box's far edge reads the next block's first voxels too.
-    first_ = blockContaining(lo);
-    const BlockIndex last = blockContaining(hi + Eigen::Vector3f::Ones());
+    // A cell at the box's far edge reads the next voxel too.
+    const Eigen::AlignedBox3f cells_W(region_W.min(), region_W.max() + Eigen::Vector3f::Constant(map.voxelSize()));
+    BlockIndex last;
+    if (!map.blockRange(cells_W, &first_, &last)) return;
     dims_ = last - first_ + BlockIndex::Ones();
     const size_t cells = static_cast<size_t>(dims_.x()) * dims_.y() * dims_.z();
     if (cells > kMaxCells) {

@@ -28,7 +28,7 @@ std::string MapServices::outputPath(const std::string& requested, const std::str
 std::unique_ptr<st::TsdfMap> MapServices::copyMap(std::vector<st::io::StampedPose>* trajectory) {
   std::lock_guard<std::mutex> lock(state_.mutex);
   if (trajectory) *trajectory = state_.trajectory;
-  return state_.pipeline->map().clone();
+  return state_.pipeline->copyWholeMap();  // swapped blocks (MaxMemoryMB) included
 }
 
 void MapServices::writeTrajectory(const std::vector<st::io::StampedPose>& trajectory) const {

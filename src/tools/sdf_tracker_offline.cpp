@@ -188,6 +188,7 @@ int run(int argc, char** argv) {
   std::vector<st::io::StampedPose> trajectory;
   std::vector<double> frame_ms, tracking_ms, fusion_ms, raycast_ms;
   size_t failed = 0, degenerate = 0;
+  bool told_of_swapping = false;
   st::tools::ProgressBar progress(sequence.size(), !args.has("quiet"));
   const auto start = std::chrono::steady_clock::now();
   for (size_t i = 0; i < sequence.size(); ++i) {
@@ -209,7 +210,17 @@ int run(int argc, char** argv) {
       if (report.fused) fusion_ms.push_back(report.fusion_ms);
       frame_ms.push_back(report.tracking_ms + report.fusion_ms + cast_ms);
     }
+    if (report.blocks_swapped_out > 0 && !told_of_swapping) {
+      told_of_swapping = true;
+      std::cout << "\nthe map reached MaxMemoryMB=" << pipeline.config().max_map_memory_mb
+                << ": blocks away from the camera go to a swap file in "
+                << pipeline.memoryBudget()->swap().directory() << " and come back when seen again\n";
+    }
     std::string message = t.message;
+    if (!report.swap_error.empty()) {
+      std::cerr << "\nframe " << i << ": " << report.swap_error << "\n";
+      message += (message.empty() ? "" : "; ") + report.swap_error;
+    }
     std::replace(message.begin(), message.end(), ',', ';');
     frames_csv << std::fixed << std::setprecision(6) << sequence.timestamp(i) << ',' << st::toString(t.status) << ','
                << joinIterations(t.iterations_per_level) << ',' << std::setprecision(6) << t.rms_residual_m << ','
@@ -223,14 +234,16 @@ int run(int argc, char** argv) {
 
   st::io::writeTrajectory(output.path("trajectory.txt"), trajectory);
   st::io::writeTextFile(output.path("frames.csv"), frames_csv.str());
-  const st::TriangleMesh mesh = st::extractMesh(pipeline.map());
-  st::io::writePly(output.path("mesh.ply"), mesh);
-  st::io::writePly(output.path("cloud.ply"), st::extractSurfaceCloud(pipeline.map()));
-  if (args.has("save-map")) st::io::writeMap(output.path("map.sdfmap"), pipeline.map());
-  if (args.has("save-volume")) {
-    st::io::writeMap(output.path("sdf_volume.vti"), pipeline.map());
-    st::io::writeObj(output.path("triangles.obj"), mesh);
-  }
+  pipeline.withWholeMap([&](const st::TsdfMap& map) {  // swapped blocks included
+    const st::TriangleMesh mesh = st::extractMesh(map);
+    st::io::writePly(output.path("mesh.ply"), mesh);
+    st::io::writePly(output.path("cloud.ply"), st::extractSurfaceCloud(map));
+    if (args.has("save-map")) st::io::writeMap(output.path("map.sdfmap"), map);
+    if (args.has("save-volume")) {
+      st::io::writeMap(output.path("sdf_volume.vti"), map);
+      st::io::writeObj(output.path("triangles.obj"), mesh);
+    }
+  });
 
   struct rusage usage;
   ::getrusage(RUSAGE_SELF, &usage);
@@ -247,8 +260,12 @@ int run(int argc, char** argv) {
           << percentile(frame_ms, 0.5) << ", p95 " << percentile(frame_ms, 0.95) << "; tracking median "
           << percentile(tracking_ms, 0.5) << ", fusion median " << percentile(fusion_ms, 0.5);
   if (!raycast_ms.empty()) summary << ", ray casting median " << percentile(raycast_ms, 0.5);
-  summary << "\nmemory: " << st::toString(v.type) << " map " << pipeline.map().memoryBytes() / 1048576.0 << " MiB, peak resident " << peak_rss_mb
-          << " MiB\n";
+  summary << "\nmemory: " << st::toString(v.type) << " map " << pipeline.map().memoryBytes() / 1048576.0 << " MiB";
+  if (const st::MapMemoryBudget* budget = pipeline.memoryBudget()) {
+    summary << " (MaxMemoryMB " << pipeline.config().max_map_memory_mb << "; " << budget->swap().size()
+            << " blocks, " << budget->swap().bytesOnDisk() / 1048576.0 << " MiB, in the swap file at the end)";
+  }
+  summary << ", peak resident " << peak_rss_mb << " MiB\n";
 
   // The same figures for scripts (bench/), as JSON.
   using st::tools::jsonNumber;
@@ -274,6 +291,8 @@ int run(int argc, char** argv) {
   }
   json << "},\n  \"peak_rss_mb\": " << jsonNumber(peak_rss_mb)
        << ",\n  \"grid_mb\": " << jsonNumber(pipeline.map().memoryBytes() / 1048576.0)
+       << ",\n  \"swapped_mb\": "
+       << jsonNumber(pipeline.memoryBudget() ? pipeline.memoryBudget()->swap().bytesOnDisk() / 1048576.0 : 0.0)
        << ",\n  \"elapsed_s\": " << jsonNumber(elapsed_s);
   if (!sequence.groundTruth().empty()) {
     try {

@@ -4,10 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <iostream>
 #include <map>
 #include <random>
 
+#include "sdf_tracker/core/block_swap.h"
 #include "sdf_tracker/core/block_table.h"
 #include "sdf_tracker/core/chunked_mesh.h"
 #include "sdf_tracker/core/integrator.h"
@@ -468,6 +470,99 @@ TEST(HouseWalk, WalksAtHalfAMetrePerSecondInsideTheHouseAndAlwaysSeesIt) {
     }
   }
   EXPECT_GT(length_m, 43.0);
+}
+
+TEST(BlockSwap, GivesBlocksBackExactlyAndReusesTheRecordsOfThoseTaken) {
+  BlockSwapFile swap(test::scratchDirectory("swap"));
+  auto blockOf = [](float seed) {
+    VoxelBlock block;
+    for (int n = 0; n < kBlockVoxels; ++n) block.voxels[n] = Voxel{seed + 1e-3f * n, seed * n};
+    block.changed_at = static_cast<uint64_t>(seed);
+    return block;
+  };
+  for (int key = 0; key < 3; ++key) swap.put(key, blockOf(key + 1.0f));
+  EXPECT_EQ(swap.size(), 3u);
+  const size_t bytes = swap.bytesOnDisk();
+  VoxelBlock back;
+  ASSERT_TRUE(swap.read(1, &back));
+  EXPECT_EQ(std::memcmp(back.voxels.data(), blockOf(2.0f).voxels.data(), sizeof(back.voxels)), 0);
+  EXPECT_EQ(back.changed_at, 2u);
+  swap.erase(1);
+  EXPECT_FALSE(swap.read(1, &back));
+  swap.put(7, blockOf(9.0f));
+  swap.put(0, blockOf(5.0f));  // replaces
+  EXPECT_EQ(swap.bytesOnDisk(), bytes) << "the freed record is reused, a replaced one rewritten";
+  ASSERT_TRUE(swap.read(0, &back));
+  EXPECT_EQ(back.voxels[100].weight, blockOf(5.0f).voxels[100].weight);
+  try {
+    BlockSwapFile nowhere("/nonexistent/sdf_tracker");
+    FAIL() << "a swap file in a missing directory";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/sdf_tracker"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SparseMap, AMemoryBudgetSwapsBlocksOutAndBackWithoutChangingTheTrajectoryOrTheMap) {
+  // The first 12 s of the house walk: down the corridor, turning into rooms.
+  const PinholeCamera camera = test::testCamera();
+  const synthetic::Scene house = synthetic::Scene::forMotion(synthetic::Motion::kWalk);
+  synthetic::NoiseModel exact;
+  exact.enabled = false;
+  Settings settings = preset("default");
+  setParameter(&settings, "MapType", std::string("sparse"));
+  SdfPipeline unbounded(settings.pipeline);
+  std::vector<DepthImage> frames;
+  std::vector<Eigen::Isometry3d> poses;
+  for (int i = 0; i < 360; i += 2) {
+    frames.push_back(house.render(camera, synthetic::cameraPose(synthetic::Motion::kWalk, i / 30.0, 0.0), exact, 0));
+    ASSERT_TRUE(unbounded.processFrame(frames.back(), camera, i / 30.0).track.tracked()) << "frame " << i;
+    poses.push_back(unbounded.pose());
+  }
+  const double full_mb = unbounded.map().memoryBytes() / 1048576.0;
+
+  setParameter(&settings, "MaxMemoryMB", 0.3 * full_mb);
+  setParameter(&settings, "SwapDirectory", test::scratchDirectory("budget"));
+  SdfPipeline bounded(settings.pipeline);
+  size_t swapped_out = 0, swapped_in = 0;
+  for (size_t f = 0; f < frames.size(); ++f) {
+    const FrameReport report = bounded.processFrame(frames[f], camera, 2.0 * f / 30.0);
+    ASSERT_TRUE(report.track.tracked()) << "frame " << 2 * f;
+    ASSERT_TRUE(report.swap_error.empty()) << report.swap_error;
+    swapped_out += report.blocks_swapped_out;
+    swapped_in += report.blocks_swapped_in;
+    ASSERT_TRUE(bounded.pose().isApprox(poses[f], 1e-12)) << "frame " << 2 * f << " moved by the budget";
+  }
+  std::cout << "map " << full_mb << " MiB unbounded, " << bounded.map().memoryBytes() / 1048576.0 << " MiB under "
+            << 0.3 * full_mb << " MiB; blocks swapped out " << swapped_out << ", read back " << swapped_in << "\n";
+  EXPECT_LE(bounded.map().memoryBytes(), 0.3 * full_mb * 1048576.0);
+  EXPECT_GT(swapped_out, 0u);
+  EXPECT_GT(swapped_in, 0u) << "the walk turns back towards swapped blocks";
+  // Swapped blocks included, the map is the unbounded one, voxel for voxel.
+  const std::unique_ptr<TsdfMap> whole = bounded.copyWholeMap();
+  const auto& a = static_cast<const SparseTsdfMap&>(unbounded.map());
+  const auto& b = static_cast<const SparseTsdfMap&>(*whole);
+  ASSERT_EQ(a.blockIndices(), b.blockIndices());
+  for (const BlockIndex& index : a.blockIndices()) {
+    ASSERT_EQ(std::memcmp(a.find(index)->voxels.data(), b.find(index)->voxels.data(), sizeof(VoxelBlock::voxels)), 0)
+        << "block " << index.transpose();
+  }
+}
+
+TEST(SparseMap, AMemoryBudgetIsRefusedForTheDenseGridAndWithoutAPlaceForItsFile) {
+  Settings settings = preset("default");
+  setParameter(&settings, "MaxMemoryMB", 100.0);
+  const std::vector<std::string> violations = settings.validate();
+  ASSERT_EQ(violations.size(), 1u);
+  EXPECT_NE(violations[0].find("MaxMemoryMB=100 applies to MapType=sparse"), std::string::npos) << violations[0];
+  setParameter(&settings, "MapType", std::string("sparse"));
+  setParameter(&settings, "SwapDirectory", std::string("/nonexistent/swap"));
+  try {
+    SdfPipeline pipeline(settings.pipeline);
+    FAIL() << "a pipeline without a place for its swap file";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("SwapDirectory"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/swap"), std::string::npos) << e.what();
+  }
 }
 
 TEST(SparseMap, SettingsRefuseCompactVoxelsForTheSparseMap) {

@@ -172,6 +172,25 @@ TEST(Offline, ASavedMapIsLoadedByTheNextRunAndACorruptOneIsRefusedByName) {
   EXPECT_NE(corrupt.output.find(first + "/map.sdfmap: its header lists"), std::string::npos) << corrupt.output;
 }
 
+TEST(Offline, AMemoryBoundIsReportedAndRefusedWhereItCannotHold) {
+  const std::string sequence = shortSequence(4);
+  const ToolRun bounded = offline("--sequence " + sequence + " --output " + test::scratchDirectory("bound") +
+                                  " --param MapType=sparse --param MaxMemoryMB=0.5");
+  EXPECT_EQ(bounded.exit_code, 0) << bounded.output;
+  EXPECT_NE(bounded.output.find("(MaxMemoryMB 0.50; 0 blocks"), std::string::npos) << bounded.output;
+
+  const ToolRun dense = offline("--sequence " + sequence + " --output " + test::scratchDirectory("bound_dense") +
+                                " --param MaxMemoryMB=64");
+  EXPECT_EQ(dense.exit_code, 1);
+  EXPECT_NE(dense.output.find("MaxMemoryMB=64 applies to MapType=sparse only"), std::string::npos) << dense.output;
+
+  const ToolRun nowhere = offline("--sequence " + sequence + " --output " + test::scratchDirectory("bound_nowhere") +
+                                  " --param MapType=sparse --param MaxMemoryMB=64 --param SwapDirectory=/nonexistent/swap");
+  EXPECT_EQ(nowhere.exit_code, 1);
+  EXPECT_NE(nowhere.output.find("SwapDirectory"), std::string::npos) << nowhere.output;
+  EXPECT_NE(nowhere.output.find("/nonexistent/swap"), std::string::npos) << nowhere.output;
+}
+
 TEST(Offline, TheJsonSummaryIsValidJsonEvenForAPathWithATab) {
   const std::string sequence = shortSequence(3);
   const std::string tabbed = sequence + "\tfolder";

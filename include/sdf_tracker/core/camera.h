@@ -5,6 +5,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 namespace sdf_tracker {
 
@@ -66,6 +67,10 @@ struct PinholeCamera {
     return {static_cast<float>((u - cx) / fx) * depth_m, static_cast<float>((v - cy) / fy) * depth_m,
             depth_m};
   }
+
+  /// The world box around what the camera at T_W_C sees up to depth z_far_m: its centre and the
+  /// image's outer corners at z_far_m.
+  Eigen::AlignedBox3f viewBox(const Eigen::Isometry3f& T_W_C, float z_far_m) const;
 
   /// Projection of a point in the camera frame to continuous pixel coordinates; z must be > 0.
   Eigen::Vector2f project(const Eigen::Vector3f& p_C) const {

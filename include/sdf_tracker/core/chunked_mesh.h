@@ -1,10 +1,9 @@
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <unordered_set>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "sdf_tracker/core/sparse_tsdf_map.h"
 #include "sdf_tracker/core/surface.h"

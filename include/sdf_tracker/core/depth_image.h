@@ -27,6 +27,8 @@ class DepthImage {
 
   /// Number of pixels that hold a measurement.
   int countMeasurements() const;
+  /// The furthest measured depth [m]; 0 when there is none.
+  float maxMeasurement() const;
 
   /// Converts raw 16-bit depth (value / depth_factor metres, 0 = none) to metres, once, at the edge.
   static DepthImage fromRaw16(const uint16_t* raw, int width, int height, double depth_factor);

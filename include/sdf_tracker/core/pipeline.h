@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include "sdf_tracker/core/block_swap.h"
 #include "sdf_tracker/core/camera.h"
 #include "sdf_tracker/core/depth_image.h"
 #include "sdf_tracker/core/depth_undistortion.h"
@@ -45,6 +46,11 @@ struct PipelineConfig {
   bool predict_motion = false;
   /// No prediction across a gap longer than this [s]: the last motion says little by then.
   double max_prediction_gap_s = 0.5;
+  /// Sparse map only: above this many MiB, blocks away from the camera are swapped to disk (see
+  /// MapMemoryBudget); 0 never.
+  double max_map_memory_mb = 0.0;
+  /// Where the swap file is made; empty: the system's temporary directory.
+  std::string swap_directory;
 
   std::vector<std::string> validate() const;
 };
@@ -57,6 +63,13 @@ struct FrameReport {
   bool reset = false;  ///< the map was cleared before this frame after repeated failures
   double tracking_ms = 0.0;
   double fusion_ms = 0.0;
+  /// Blocks read back from the swap file before tracking, and written to it after fusion
+  /// (MaxMemoryMB).
+  size_t blocks_swapped_in = 0;
+  size_t blocks_swapped_out = 0;
+  /// The swap file failed (e.g. the disk is full): what and where. Blocks that could not be
+  /// written stay in memory; blocks that could not be read back stay in the file.
+  std::string swap_error;
 };
 
 /// The on-line loop: track each frame against the map, then fuse it at the tracked pose. Owns the
@@ -77,8 +90,20 @@ class SdfPipeline {
 
   /// Camera to world at the last accepted frame.
   const Eigen::Isometry3d& pose() const { return T_W_C_; }
-  /// The map (a TsdfVolume or a SparseTsdfMap, per config().volume.type).
+  /// The map in memory (a TsdfVolume or a SparseTsdfMap, per config().volume.type): with a
+  /// memory budget, without the blocks swapped to disk (see withWholeMap()).
   const TsdfMap& map() const { return *map_; }
+  /// A copy of the whole map, swapped blocks included: what a save or a whole mesh must read.
+  std::unique_ptr<TsdfMap> copyWholeMap() const;
+  /// Calls fn(const TsdfMap&) with the whole map: the map itself when nothing is swapped out,
+  /// else a copy with the swapped blocks read back (memory beyond the budget while it runs).
+  template <typename Fn>
+  void withWholeMap(Fn&& fn) const {
+    if (!budget_ || budget_->swap().size() == 0) return fn(*map_);
+    fn(*copyWholeMap());
+  }
+  /// The memory budget (MaxMemoryMB), or nullptr when there is none.
+  const MapMemoryBudget* memoryBudget() const { return budget_.get(); }
   /// Frames in a row that could not be tracked (0 while tracking works).
   int consecutiveFailures() const { return consecutive_failures_; }
 
@@ -102,6 +127,12 @@ class SdfPipeline {
   /// Where the camera should be at `timestamp_s` if it kept its last motion; the last pose when
   /// prediction is off or there is no motion to go by.
   Eigen::Isometry3d predictPose(double timestamp_s) const;
+  /// With a memory budget: reads back the swapped blocks near the view from T_W_C up to
+  /// furthest_m (what tracking or fusion there may touch), counted in the report.
+  void restoreNear(const Eigen::Isometry3d& T_W_C, const PinholeCamera& camera, float furthest_m, FrameReport* report);
+  /// With a memory budget and the map over it: swaps out blocks away from that view.
+  void evictAwayFrom(const Eigen::Isometry3d& T_W_C, const PinholeCamera& camera, float furthest_m,
+                     FrameReport* report);
 
   PipelineConfig config_;
   std::unique_ptr<TsdfMap> map_;
@@ -109,6 +140,8 @@ class SdfPipeline {
   std::unique_ptr<Tracker> tracker_;
   /// The pixel map of the last distorted camera seen (made again when the camera changes).
   std::optional<DepthUndistortion> undistortion_;
+  /// Present with a sparse map and max_map_memory_mb > 0.
+  std::unique_ptr<MapMemoryBudget> budget_;
   Eigen::Isometry3d T_W_C_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   bool map_initialised_ = false;

@@ -81,6 +81,16 @@ class SparseTsdfMap : public TsdfMap {
     // Written so that NaN fails the comparison.
     return lattice.cwiseAbs().maxCoeff() < static_cast<float>(kMaxBlock) * kBlockSide;
   }
+  /// The blocks [first, last] that hold the lattice voxels inside box_W; false (and nothing set)
+  /// when the box is empty or leaves the maps' reach.
+  bool blockRange(const Eigen::AlignedBox3f& box_W, BlockIndex* first, BlockIndex* last) const {
+    if (box_W.isEmpty()) return false;
+    const Eigen::Vector3f lo = toLattice(box_W.min()), hi = toLattice(box_W.max());
+    if (!withinReach(lo) || !withinReach(hi)) return false;
+    *first = blockContaining(lo);
+    *last = blockContaining(hi);
+    return true;
+  }
   /// Whether a block index lies within the maps' reach (keyOf() does not wrap).
   static bool inKeyRange(const BlockIndex& block) { return block.cwiseAbs().maxCoeff() <= kMaxBlock; }
   /// Block edge length [m].
