@@ -204,6 +204,43 @@ TsdfVolume toDenseVolume(const TsdfMap& map) {
   return sparse.toDense(first, dims);
 }
 
+TsdfVolume toDenseVolume(const TsdfMap& map, const Eigen::AlignedBox3d& region_W) {
+  const VolumeConfig& c = map.config();
+  // The lattice voxels inside the box: from the first at or above its minimum to the last at or
+  // below its maximum.
+  Eigen::Vector3d lo = ((region_W.min() - c.origin_W) / c.voxel_size_m).array().ceil();
+  Eigen::Vector3d hi = ((region_W.max() - c.origin_W) / c.voxel_size_m).array().floor();
+  if (map.type() == MapType::kDense) {
+    lo = lo.cwiseMax(Eigen::Vector3d::Zero());
+    hi = hi.cwiseMin((c.dims - Eigen::Vector3i::Ones()).cast<double>());
+  }
+  const Eigen::Vector3d dims = hi - lo + Eigen::Vector3d::Ones();
+  if (!region_W.min().allFinite() || !region_W.max().allFinite() || !(dims.minCoeff() >= 2.0) ||
+      !(dims.maxCoeff() <= 4096.0)) {
+    std::ostringstream msg;
+    msg << "the region from (" << region_W.min().transpose() << ") to (" << region_W.max().transpose()
+        << ") m holds " << (dims.array().max(0.0)).transpose() << " voxels of the map's "
+        << c.voxel_size_m << " m lattice";
+    msg << (map.type() == MapType::kDense ? " inside its grid" : "") << "; a volume needs 2 to 4096 along each axis";
+    throw std::invalid_argument(msg.str());
+  }
+  const Eigen::Vector3i first = lo.cast<int>();
+  if (map.type() == MapType::kSparse) return static_cast<const SparseTsdfMap&>(map).toDense(first, dims.cast<int>());
+  const auto& dense = static_cast<const TsdfVolume&>(map);
+  VolumeConfig crop = c;
+  crop.dims = dims.cast<int>();
+  crop.origin_W = c.origin_W + c.voxel_size_m * first.cast<double>();
+  TsdfVolume volume(crop);
+  for (int k = 0; k < crop.dims.z(); ++k) {
+    for (int j = 0; j < crop.dims.y(); ++j) {
+      for (int i = 0; i < crop.dims.x(); ++i) {
+        volume.setVoxel(i, j, k, dense.voxel(first.x() + i, first.y() + j, first.z() + k));
+      }
+    }
+  }
+  return volume;
+}
+
 SparseTsdfMap toSparseMap(const TsdfMap& map) {
   if (map.type() == MapType::kSparse) return static_cast<const SparseTsdfMap&>(map);
   const auto& dense = static_cast<const TsdfVolume&>(map);

@@ -10,6 +10,7 @@
 #include <iomanip>
 #include <iostream>
 #include <numeric>
+#include <optional>
 #include <sstream>
 
 #ifdef _OPENMP
@@ -23,6 +24,7 @@
 #include "sdf_tracker/core/parameters.h"
 #include "sdf_tracker/core/pipeline.h"
 #include "sdf_tracker/core/raycaster.h"
+#include "sdf_tracker/core/sparse_tsdf_map.h"
 #include "sdf_tracker/core/surface.h"
 #include "sdf_tracker/core/tum_sequence.h"
 #include "sdf_tracker/core/validation.h"
@@ -53,6 +55,8 @@ Tracks a depth camera through a TUM-layout sequence and reconstructs the scene.
                         (--save-map; loads sparse) or a .vti (--save-volume; loads dense)
   --save-map            also write the map as map.sdfmap (every block, exactly; reloadable)
   --save-volume         also write the map as sdf_volume.vti (ParaView) and triangles.obj
+  --volume-region X0,Y0,Z0,X1,Y1,Z1  with --save-volume: only the voxels in this box (metres,
+                        the map's frame: the first camera's), e.g. one room of a large map
   --raycast             also ray-cast the virtual depth view every frame (as the node's
                         image_denoised) and time it
   --quiet               no progress bar
@@ -85,6 +89,15 @@ st::PinholeCamera parseIntrinsics(const std::string& text, const st::PinholeCame
   return camera;
 }
 
+Eigen::AlignedBox3d parseRegion(const std::string& text) {
+  const std::vector<double> v = parseNumberList("--volume-region", text);
+  if (v.size() != 6 || !(v[0] < v[3] && v[1] < v[4] && v[2] < v[5])) {
+    throw std::invalid_argument("--volume-region: expected X0,Y0,Z0,X1,Y1,Z1 with X0 < X1, Y0 < Y1, Z0 < Z1, got \"" +
+                                text + "\"");
+  }
+  return Eigen::AlignedBox3d(Eigen::Vector3d(v[0], v[1], v[2]), Eigen::Vector3d(v[3], v[4], v[5]));
+}
+
 std::string joinIterations(const std::vector<int>& iterations) {
   std::string s;
   for (size_t i = 0; i < iterations.size(); ++i) s += (i ? "/" : "") + std::to_string(iterations[i]);
@@ -102,7 +115,7 @@ int run(int argc, char** argv) {
   const st::tools::CommandLine args(
       argc, argv,
       {"sequence", "output", "preset", "param", "frames", "threads", "depth-factor", "intrinsics", "distortion",
-       "load-volume"},
+       "load-volume", "volume-region"},
       {"save-map", "save-volume", "raycast", "quiet", "list-params", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -159,6 +172,11 @@ int run(int argc, char** argv) {
     const int frames = args.getInt("frames", 0);
     if (frames < 1) throw std::invalid_argument("--frames must be >= 1 (got " + std::to_string(frames) + ")");
     sequence.truncate(static_cast<size_t>(frames));
+  }
+  std::optional<Eigen::AlignedBox3d> volume_region;
+  if (args.has("volume-region")) {
+    if (!args.has("save-volume")) throw std::invalid_argument("--volume-region applies to --save-volume, which is not given");
+    volume_region = parseRegion(args.get("volume-region"));
   }
   const std::vector<std::string> summaries = {"summary.txt", "summary.json"};
   st::tools::OutputFolder output(output_dir, {"trajectory.txt", "frames.csv", "mesh.ply", "cloud.ply", "sdf_volume.vti",
@@ -240,7 +258,8 @@ int run(int argc, char** argv) {
     st::io::writePly(output.path("cloud.ply"), st::extractSurfaceCloud(map));
     if (args.has("save-map")) st::io::writeMap(output.path("map.sdfmap"), map);
     if (args.has("save-volume")) {
-      st::io::writeMap(output.path("sdf_volume.vti"), map);
+      if (volume_region) st::io::writeVti(output.path("sdf_volume.vti"), st::toDenseVolume(map, *volume_region));
+      else st::io::writeMap(output.path("sdf_volume.vti"), map);
       st::io::writeObj(output.path("triangles.obj"), mesh);
     }
   });

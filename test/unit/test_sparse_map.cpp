@@ -271,6 +271,48 @@ TEST_F(FusionFixture, SurfacesMatchTheDenseGrids) {
   EXPECT_EQ(triangles, mesh_b.triangles.size());
 }
 
+TEST_F(FusionFixture, ARegionOfEitherStorageExportsAsTheVoxelsInsideIt) {
+  // Around an observed voxel c: a box from a little below lattice voxel c - (10, 7, 13) to a
+  // little beyond c + (9, 6, 13).
+  Eigen::Vector3i c = dense.dims() / 2;
+  for (int k = 0; k < dense.dims().z() && dense.voxel(c.x(), c.y(), c.z()).weight <= 0.0f; ++k) c.z() = k;
+  ASSERT_GT(dense.voxel(c.x(), c.y(), c.z()).weight, 0.0f);
+  c = c.cwiseMax(Eigen::Vector3i(10, 7, 13)).cwiseMin(dense.dims() - Eigen::Vector3i(10, 7, 14));
+  const double v = dense.config().voxel_size_m;
+  const Eigen::Vector3d lo = dense.config().origin_W + v * ((c - Eigen::Vector3i(10, 7, 13)).cast<double>() - Eigen::Vector3d(0.3, 0.8, 0.1));
+  const Eigen::Vector3d hi = dense.config().origin_W + v * ((c + Eigen::Vector3i(9, 6, 13)).cast<double>() + Eigen::Vector3d(0.4, 0.0, 0.6));
+  const Eigen::Vector3i first = c - Eigen::Vector3i(10, 7, 13);
+  for (const TsdfMap* map : std::initializer_list<const TsdfMap*>{&dense, &sparse}) {
+    const TsdfVolume region = toDenseVolume(*map, Eigen::AlignedBox3d(lo, hi));
+    ASSERT_EQ(region.dims(), Eigen::Vector3i(20, 14, 27)) << toString(map->type());
+    EXPECT_TRUE(region.position(0, 0, 0).isApprox(dense.position(first)));
+    int observed = 0;
+    for (int k = 0; k < 27; ++k) {
+      for (int j = 0; j < 14; ++j) {
+        for (int i = 0; i < 20; ++i) {
+          const Eigen::Vector3i at = first + Eigen::Vector3i(i, j, k);
+          const Voxel expected = map == &dense ? dense.voxel(at.x(), at.y(), at.z()) : sparse.voxel(at);
+          ASSERT_EQ(region.voxel(i, j, k).weight, expected.weight) << i << " " << j << " " << k;
+          if (expected.weight > 0.0f) {
+            ASSERT_EQ(region.voxel(i, j, k).distance_m, expected.distance_m);
+            ++observed;
+          }
+        }
+      }
+    }
+    EXPECT_GT(observed, 100);
+  }
+  // A dense grid's region is clipped to the grid; one too thin for a volume is refused by name.
+  const Eigen::Vector3d beyond = dense.config().origin_W + v * Eigen::Vector3d(-50.0, -50.0, -50.0);
+  EXPECT_EQ(toDenseVolume(dense, Eigen::AlignedBox3d(beyond, lo)).dims(), first);
+  try {
+    toDenseVolume(sparse, Eigen::AlignedBox3d(lo, lo + Eigen::Vector3d(0.5 * v, 1.0, 1.0)));
+    FAIL() << "a region without two voxels along x";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("a volume needs 2 to 4096 along each axis"), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(FusionFixture, TheChunkedMeshFollowsTheMapSendingOnlyWhatChanged) {
   ChunkedMesher mesher;
   std::map<uint64_t, size_t> shown;  // chunk key -> triangles, as a viewer would hold them

@@ -43,6 +43,14 @@ ToolRun offline(const std::string& arguments) {
   return runCommand(std::string(SDF_TRACKER_OFFLINE) + " --quiet " + arguments);
 }
 
+/// Runs the offline runner on `sequence` with `arguments` and expects it to refuse them: exit
+/// code 1, and each of `said` in what it printed.
+void expectRefused(const std::string& sequence, const std::string& arguments, std::initializer_list<std::string> said) {
+  const ToolRun run = offline("--sequence " + sequence + " --output " + test::scratchDirectory("refused") + " " + arguments);
+  EXPECT_EQ(run.exit_code, 1) << arguments << ":\n" << run.output;
+  for (const std::string& text : said) EXPECT_NE(run.output.find(text), std::string::npos) << run.output;
+}
+
 /// A short synthetic QVGA sequence with ground truth.
 std::string shortSequence(int frames) {
   const std::string dir = test::scratchDirectory("cli_sequence");
@@ -179,16 +187,24 @@ TEST(Offline, AMemoryBoundIsReportedAndRefusedWhereItCannotHold) {
   EXPECT_EQ(bounded.exit_code, 0) << bounded.output;
   EXPECT_NE(bounded.output.find("(MaxMemoryMB 0.50; 0 blocks"), std::string::npos) << bounded.output;
 
-  const ToolRun dense = offline("--sequence " + sequence + " --output " + test::scratchDirectory("bound_dense") +
-                                " --param MaxMemoryMB=64");
-  EXPECT_EQ(dense.exit_code, 1);
-  EXPECT_NE(dense.output.find("MaxMemoryMB=64 applies to MapType=sparse only"), std::string::npos) << dense.output;
+  expectRefused(sequence, "--param MaxMemoryMB=64", {"MaxMemoryMB=64 applies to MapType=sparse only"});
+  expectRefused(sequence, "--param MapType=sparse --param MaxMemoryMB=64 --param SwapDirectory=/nonexistent/swap",
+                {"SwapDirectory", "/nonexistent/swap"});
+}
 
-  const ToolRun nowhere = offline("--sequence " + sequence + " --output " + test::scratchDirectory("bound_nowhere") +
-                                  " --param MapType=sparse --param MaxMemoryMB=64 --param SwapDirectory=/nonexistent/swap");
-  EXPECT_EQ(nowhere.exit_code, 1);
-  EXPECT_NE(nowhere.output.find("SwapDirectory"), std::string::npos) << nowhere.output;
-  EXPECT_NE(nowhere.output.find("/nonexistent/swap"), std::string::npos) << nowhere.output;
+TEST(Offline, AVolumeRegionWritesOnlyTheVoxelsInsideIt) {
+  const std::string sequence = shortSequence(3);
+  const std::string out = test::scratchDirectory("region");
+  const ToolRun run = offline("--sequence " + sequence + " --output " + out +
+                              " --param MapType=sparse --param CellSize=0.04 --save-volume --volume-region -0.5,-0.5,0.5,0.5,0.3,2");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const TsdfVolume region = io::readVti(out + "/sdf_volume.vti");
+  // The lattice starts at the first camera's position, so voxel i lies at 0.04 i m.
+  EXPECT_EQ(region.dims(), Eigen::Vector3i(25, 20, 38));
+  EXPECT_TRUE(region.position(0, 0, 0).isApprox(Eigen::Vector3f(-0.48f, -0.48f, 0.52f), 1e-5f)) << region.position(0, 0, 0);
+
+  expectRefused(sequence, "--volume-region 0,0,0,1,1,1", {"--volume-region applies to --save-volume"});
+  expectRefused(sequence, "--save-volume --volume-region 0,0,0,1,-1,1", {"--volume-region: expected X0,Y0,Z0,X1,Y1,Z1"});
 }
 
 TEST(Offline, TheJsonSummaryIsValidJsonEvenForAPathWithATab) {

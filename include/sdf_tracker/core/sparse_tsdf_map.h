@@ -194,6 +194,11 @@ class SparseTsdfMap : public TsdfMap {
 
 /// The map as a dense grid: a copy of a dense one; the box around every block of a sparse one.
 TsdfVolume toDenseVolume(const TsdfMap& map);
+/// The lattice voxels of the map inside region_W (world frame, metres; a dense grid's clipped to
+/// its extent) as a dense grid at their place, e.g. to look at one room of a large map in
+/// ParaView. Throws std::invalid_argument naming the region when it holds fewer than two voxels
+/// along an axis, or when the grid would be too large (VolumeConfig::validate).
+TsdfVolume toDenseVolume(const TsdfMap& map, const Eigen::AlignedBox3d& region_W);
 /// The map as blocks: a copy of a sparse one; the blocks of a dense one that hold an observed
 /// voxel (on the same lattice, so every observed voxel keeps its value).
 SparseTsdfMap toSparseMap(const TsdfMap& map);
