@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <sstream>
 #include <stdexcept>
 #include <utility>
 
@@ -96,30 +97,25 @@ MapMemoryBudget::MapMemoryBudget(size_t max_bytes, const std::string& directory)
   if (max_bytes == 0) throw std::invalid_argument("a memory budget of zero bytes");
 }
 
-size_t MapMemoryBudget::restore(SparseTsdfMap* map, const SparseTsdfMap::BlockIndex& first,
-                                const SparseTsdfMap::BlockIndex& last) {
-  if (swap_.size() == 0 || (last.array() < first.array()).any()) return 0;
+size_t MapMemoryBudget::restore(SparseTsdfMap* map, const BlockBox& box) {
+  if (swap_.size() == 0 || box.empty()) return 0;
   std::vector<SparseTsdfMap::BlockIndex> wanted;
-  for (int z = first.z() >> kRegionShift; z <= last.z() >> kRegionShift; ++z) {
-    for (int y = first.y() >> kRegionShift; y <= last.y() >> kRegionShift; ++y) {
-      for (int x = first.x() >> kRegionShift; x <= last.x() >> kRegionShift; ++x) {
-        const auto region = swapped_by_region_.find(SparseTsdfMap::keyOf({x, y, z}));
-        if (region == swapped_by_region_.end()) continue;
-        std::vector<SparseTsdfMap::BlockIndex>& blocks = region->second;
-        // Those in the box leave the list (order does not matter: swap with the last).
-        for (size_t n = 0; n < blocks.size();) {
-          if ((blocks[n].array() >= first.array()).all() && (blocks[n].array() <= last.array()).all()) {
-            wanted.push_back(blocks[n]);
-            blocks[n] = blocks.back();
-            blocks.pop_back();
-          } else {
-            ++n;
-          }
-        }
-        if (blocks.empty()) swapped_by_region_.erase(region);
+  SparseTsdfMap::chunksOf(box).forEach([&](const Eigen::Vector3i& chunk) {
+    const auto listed = swapped_by_chunk_.find(SparseTsdfMap::keyOf(chunk));
+    if (listed == swapped_by_chunk_.end()) return;
+    std::vector<SparseTsdfMap::BlockIndex>& blocks = listed->second;
+    // Those in the box leave the list (order does not matter: swap with the last).
+    for (size_t n = 0; n < blocks.size();) {
+      if (box.contains(blocks[n])) {
+        wanted.push_back(blocks[n]);
+        blocks[n] = blocks.back();
+        blocks.pop_back();
+      } else {
+        ++n;
       }
     }
-  }
+    if (blocks.empty()) swapped_by_chunk_.erase(listed);
+  });
   VoxelBlock block;
   for (size_t n = 0; n < wanted.size(); ++n) {
     const uint64_t key = SparseTsdfMap::keyOf(wanted[n]);
@@ -127,7 +123,7 @@ size_t MapMemoryBudget::restore(SparseTsdfMap* map, const SparseTsdfMap::BlockIn
       swap_.read(key, &block);
     } catch (const std::runtime_error&) {
       // The blocks not read stay in the file and listed; the map goes on without them.
-      for (size_t m = n; m < wanted.size(); ++m) swapped_by_region_[regionOf(wanted[m])].push_back(wanted[m]);
+      for (size_t m = n; m < wanted.size(); ++m) listSwapped(wanted[m]);
       throw;
     }
     map->allocate(wanted[n]) = block;
@@ -136,13 +132,12 @@ size_t MapMemoryBudget::restore(SparseTsdfMap* map, const SparseTsdfMap::BlockIn
   return wanted.size();
 }
 
-size_t MapMemoryBudget::evict(SparseTsdfMap* map, const SparseTsdfMap::BlockIndex& keep_first,
-                              const SparseTsdfMap::BlockIndex& keep_last, const Eigen::Vector3f& centre_W) {
+size_t MapMemoryBudget::evict(SparseTsdfMap* map, const BlockBox& keep, const Eigen::Vector3f& centre_W) {
   if (map->memoryBytes() <= max_bytes_) return 0;
   std::vector<std::pair<float, SparseTsdfMap::BlockIndex>> candidates;  // squared distance, block
   const Eigen::Vector3f half_block = Eigen::Vector3f::Constant(0.5f * map->blockSize());
   map->forEachBlock([&](const SparseTsdfMap::BlockIndex& b, const VoxelBlock&) {
-    if ((b.array() >= keep_first.array()).all() && (b.array() <= keep_last.array()).all()) return;
+    if (keep.contains(b)) return;
     const Eigen::Vector3f centre = map->position(SparseTsdfMap::firstVoxel(b)) + half_block;
     candidates.emplace_back((centre - centre_W).squaredNorm(), b);
   });
@@ -154,11 +149,22 @@ size_t MapMemoryBudget::evict(SparseTsdfMap* map, const SparseTsdfMap::BlockInde
   for (const auto& candidate : candidates) {
     if (map->memoryBytes() <= low_water) break;
     swap_.put(SparseTsdfMap::keyOf(candidate.second), *map->find(candidate.second));
-    swapped_by_region_[regionOf(candidate.second)].push_back(candidate.second);
+    listSwapped(candidate.second);
     map->remove(candidate.second);
     ++evicted;
   }
   return evicted;
+}
+
+void MapMemoryBudget::listSwapped(const SparseTsdfMap::BlockIndex& block) {
+  swapped_by_chunk_[SparseTsdfMap::keyOf(SparseTsdfMap::chunkOf(block))].push_back(block);
+}
+
+std::string MapMemoryBudget::startNotice() const {
+  std::ostringstream notice;
+  notice << "the map reached MaxMemoryMB=" << max_bytes_ / 1048576.0 << ": blocks away from the camera go to a swap file in "
+         << swap_.directory() << " and come back when seen again";
+  return notice.str();
 }
 
 SparseTsdfMap MapMemoryBudget::whole(const SparseTsdfMap& map) const {

@@ -9,7 +9,7 @@ std::vector<ChunkedMesher::Chunk> ChunkedMesher::update(const SparseTsdfMap& map
   std::vector<uint64_t> dirty;  // chunk keys
   if (restarted_) {
     map.forEachBlock([&dirty](const SparseTsdfMap::BlockIndex& block, const VoxelBlock&) {
-      dirty.push_back(SparseTsdfMap::keyOf(chunkOf(block)));
+      dirty.push_back(SparseTsdfMap::keyOf(SparseTsdfMap::chunkOf(block)));
     });
     shown_.clear();
   } else {
@@ -17,7 +17,8 @@ std::vector<ChunkedMesher::Chunk> ChunkedMesher::update(const SparseTsdfMap& map
     // triangles of the block and of the seven blocks below it.
     for (const SparseTsdfMap::BlockIndex& block : map.changedSince(meshed_revision_)) {
       for (int n = 0; n < 8; ++n) {
-        dirty.push_back(SparseTsdfMap::keyOf(chunkOf(block - Eigen::Vector3i(n & 1, (n >> 1) & 1, (n >> 2) & 1))));
+        dirty.push_back(
+            SparseTsdfMap::keyOf(SparseTsdfMap::chunkOf(block - Eigen::Vector3i(n & 1, (n >> 1) & 1, (n >> 2) & 1))));
       }
     }
   }
@@ -29,11 +30,9 @@ std::vector<ChunkedMesher::Chunk> ChunkedMesher::update(const SparseTsdfMap& map
 #pragma omp parallel for schedule(dynamic, 1)
   for (size_t c = 0; c < chunks.size(); ++c) {
     meshed[c].index = chunks[c];
-    const SparseTsdfMap::BlockIndex first = chunks[c] * kChunkBlocks;
-    map.forEachBlockIn(first, first + SparseTsdfMap::BlockIndex::Constant(kChunkBlocks - 1),
-                       [&](const SparseTsdfMap::BlockIndex& block, const VoxelBlock&) {
-                         appendMesh(extractBlockMesh(map, block), &meshed[c].mesh);
-                       });
+    map.forEachBlockIn(SparseTsdfMap::blocksOf(chunks[c]), [&](const SparseTsdfMap::BlockIndex& block, const VoxelBlock&) {
+      appendMesh(extractBlockMesh(map, block), &meshed[c].mesh);
+    });
   }
   // Chunks without a surface that were never shown need not be sent.
   std::vector<Chunk> changed;

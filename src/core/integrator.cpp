@@ -232,11 +232,8 @@ size_t integrateSparse(const VoxelFusion& fusion, const DepthImage& depth, const
   const Eigen::Vector3f centre_offset_C =
       T_C_W.linear() * Eigen::Vector3f::Constant(0.5f * (kBlockSide - 1) * map->voxelSize());
   std::vector<std::pair<Eigen::Vector3f, VoxelBlock*>> visible;  // first voxel's centre in the camera frame
-  // No block at all when the view leaves the map's reach.
-  SparseTsdfMap::BlockIndex first_block = SparseTsdfMap::BlockIndex::Zero();
-  SparseTsdfMap::BlockIndex last_block = -SparseTsdfMap::BlockIndex::Ones();
-  map->blockRange(camera.viewBox(T_W_C_f, z_far), &first_block, &last_block);
-  map->forEachBlockIn(first_block, last_block, [&](const SparseTsdfMap::BlockIndex& index, VoxelBlock& block) {
+  map->forEachBlockIn(map->blockRange(camera.viewBox(T_W_C_f, z_far)), [&](const SparseTsdfMap::BlockIndex& index,
+                                                                             VoxelBlock& block) {
     const Eigen::Vector3f first_C = T_C_W * map->position(SparseTsdfMap::firstVoxel(index));
     if (frustum.mayHoldSphere(first_C + centre_offset_C, radius)) {
       visible.emplace_back(first_C, &block);

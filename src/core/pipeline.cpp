@@ -21,12 +21,11 @@ double millisecondsSince(std::chrono::steady_clock::time_point start) {
 
 /// What the pipeline may read or write of a sparse map around a view: the box of the view up to
 /// its furthest depth plus the truncation, widened by the motion a frame may still make.
-bool blocksNearView(const SparseTsdfMap& map, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C,
-                    float furthest_m, double max_motion_m, SparseTsdfMap::BlockIndex* first,
-                    SparseTsdfMap::BlockIndex* last) {
+BlockBox blocksNearView(const SparseTsdfMap& map, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C,
+                        float furthest_m, double max_motion_m) {
   const Eigen::AlignedBox3f view = camera.viewBox(T_W_C.cast<float>(), furthest_m + map.positiveTruncation());
   const float margin = static_cast<float>(max_motion_m) + map.blockSize();
-  return map.blockRange(Eigen::AlignedBox3f(view.min().array() - margin, view.max().array() + margin), first, last);
+  return map.blockRange(Eigen::AlignedBox3f(view.min().array() - margin, view.max().array() + margin));
 }
 
 /// The budget for the config, or none.
@@ -166,10 +165,9 @@ void SdfPipeline::restoreNear(const Eigen::Isometry3d& T_W_C, const PinholeCamer
                               FrameReport* report) {
   if (!budget_ || budget_->swap().size() == 0) return;
   auto& sparse = static_cast<SparseTsdfMap&>(*map_);
-  SparseTsdfMap::BlockIndex first, last;
-  if (!blocksNearView(sparse, camera, T_W_C, furthest_m, config_.tracker.max_translation_m, &first, &last)) return;
   try {
-    report->blocks_swapped_in += budget_->restore(&sparse, first, last);
+    report->blocks_swapped_in +=
+        budget_->restore(&sparse, blocksNearView(sparse, camera, T_W_C, furthest_m, config_.tracker.max_translation_m));
   } catch (const std::runtime_error& e) {
     report->swap_error = e.what();
   }
@@ -179,10 +177,14 @@ void SdfPipeline::evictAwayFrom(const Eigen::Isometry3d& T_W_C, const PinholeCam
                                 FrameReport* report) {
   if (!budget_) return;
   auto& sparse = static_cast<SparseTsdfMap&>(*map_);
-  SparseTsdfMap::BlockIndex first, last;
-  if (!blocksNearView(sparse, camera, T_W_C, furthest_m, config_.tracker.max_translation_m, &first, &last)) return;
+  const BlockBox keep = blocksNearView(sparse, camera, T_W_C, furthest_m, config_.tracker.max_translation_m);
+  if (keep.empty()) return;  // the view left the map's reach: nothing to go by
   try {
-    report->blocks_swapped_out += budget_->evict(&sparse, first, last, T_W_C.translation().cast<float>());
+    report->blocks_swapped_out += budget_->evict(&sparse, keep, T_W_C.translation().cast<float>());
+    if (report->blocks_swapped_out > 0 && !told_of_swapping_) {
+      told_of_swapping_ = true;
+      report->swap_notice = budget_->startNotice();
+    }
   } catch (const std::runtime_error& e) {
     report->swap_error = e.what();
   }

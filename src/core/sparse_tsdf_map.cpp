@@ -64,18 +64,30 @@ void SparseTsdfMap::bounds(Eigen::Vector3i* first, Eigen::Vector3i* dims) const 
   *dims = (hi - lo + Eigen::Vector3i::Ones()) * kBlockSide;
 }
 
-TsdfVolume SparseTsdfMap::toDense(const Eigen::Vector3i& first, const Eigen::Vector3i& dims) const {
-  VolumeConfig dense = config_;
-  dense.dims = dims;
-  dense.origin_W = config_.origin_W + config_.voxel_size_m * first.cast<double>();
-  TsdfVolume volume(dense);
+namespace {
+
+/// The lattice voxels [first, first + dims) of a map on `lattice`, read through voxelAt(index), as
+/// a dense grid at their place.
+template <typename VoxelAt>
+TsdfVolume cropOf(const VolumeConfig& lattice, const Eigen::Vector3i& first, const Eigen::Vector3i& dims,
+                  const VoxelAt& voxelAt) {
+  VolumeConfig crop = lattice;
+  crop.dims = dims;
+  crop.origin_W = lattice.origin_W + lattice.voxel_size_m * first.cast<double>();
+  TsdfVolume volume(crop);
 #pragma omp parallel for schedule(dynamic, 1)
   for (int k = 0; k < dims.z(); ++k) {
     for (int j = 0; j < dims.y(); ++j) {
-      for (int i = 0; i < dims.x(); ++i) volume.setVoxel(i, j, k, voxel(first + Eigen::Vector3i(i, j, k)));
+      for (int i = 0; i < dims.x(); ++i) volume.setVoxel(i, j, k, voxelAt(first + Eigen::Vector3i(i, j, k)));
     }
   }
   return volume;
+}
+
+}  // namespace
+
+TsdfVolume SparseTsdfMap::toDense(const Eigen::Vector3i& first, const Eigen::Vector3i& dims) const {
+  return cropOf(config_, first, dims, [this](const Eigen::Vector3i& index) { return voxel(index); });
 }
 
 void SparseTsdfMap::clear() {
@@ -147,18 +159,12 @@ class SparseTsdfMap::RegionSampler final : public FieldSampler {
   RegionSampler(const SparseTsdfMap& map, const Eigen::AlignedBox3f& region_W) : map_(map) {
     // A cell at the box's far edge reads the next voxel too.
     const Eigen::AlignedBox3f cells_W(region_W.min(), region_W.max() + Eigen::Vector3f::Constant(map.voxelSize()));
-    BlockIndex last;
-    if (!map.blockRange(cells_W, &first_, &last)) return;
-    dims_ = last - first_ + BlockIndex::Ones();
-    const size_t cells = static_cast<size_t>(dims_.x()) * dims_.y() * dims_.z();
-    if (cells > kMaxCells) {
-      dims_.setZero();
-      return;
-    }
-    cells_.assign(cells, nullptr);
-    map.forEachBlockIn(first_, last, [this](const BlockIndex& index, const VoxelBlock& block) {
-      cells_[cellOf(index)] = &block;
-    });
+    const BlockBox box = map.blockRange(cells_W);
+    if (box.empty() || box.count() > kMaxCells) return;  // sample through the table
+    first_ = box.first;
+    dims_ = box.last - box.first + BlockIndex::Ones();
+    cells_.assign(static_cast<size_t>(box.count()), nullptr);
+    map.forEachBlockIn(box, [this](const BlockIndex& index, const VoxelBlock& block) { cells_[cellOf(index)] = &block; });
   }
 
   bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override {
@@ -171,7 +177,7 @@ class SparseTsdfMap::RegionSampler final : public FieldSampler {
  private:
   /// Bounds the array at 2 MiB of pointers (a 10 m cube of 16 cm blocks); larger regions sample
   /// through the table.
-  static constexpr size_t kMaxCells = size_t{1} << 18;
+  static constexpr double kMaxCells = 1 << 18;
 
   /// The block's place in cells_, or -1 outside the box.
   int cellOf(const BlockIndex& block) const {
@@ -227,18 +233,7 @@ TsdfVolume toDenseVolume(const TsdfMap& map, const Eigen::AlignedBox3d& region_W
   const Eigen::Vector3i first = lo.cast<int>();
   if (map.type() == MapType::kSparse) return static_cast<const SparseTsdfMap&>(map).toDense(first, dims.cast<int>());
   const auto& dense = static_cast<const TsdfVolume&>(map);
-  VolumeConfig crop = c;
-  crop.dims = dims.cast<int>();
-  crop.origin_W = c.origin_W + c.voxel_size_m * first.cast<double>();
-  TsdfVolume volume(crop);
-  for (int k = 0; k < crop.dims.z(); ++k) {
-    for (int j = 0; j < crop.dims.y(); ++j) {
-      for (int i = 0; i < crop.dims.x(); ++i) {
-        volume.setVoxel(i, j, k, dense.voxel(first.x() + i, first.y() + j, first.z() + k));
-      }
-    }
-  }
-  return volume;
+  return cropOf(c, first, dims.cast<int>(), [&dense](const Eigen::Vector3i& v) { return dense.voxel(v.x(), v.y(), v.z()); });
 }
 
 SparseTsdfMap toSparseMap(const TsdfMap& map) {

@@ -249,12 +249,6 @@ void TrackerServer::process(const Frame& frame) {
     }
     last_stamp_ = state_.last_stamp = image.header.stamp;
     T_W_C = state_.pipeline->pose();
-    if (report.blocks_swapped_out > 0) {
-      ROS_INFO_ONCE("sdf_tracker: the map reached MaxMemoryMB=%g: blocks away from the camera go to a swap file in "
-                    "%s and come back when seen again",
-                    state_.pipeline->config().max_map_memory_mb,
-                    state_.pipeline->memoryBudget()->swap().directory().c_str());
-    }
     status.consecutive_failures = static_cast<uint32_t>(state_.pipeline->consecutiveFailures());
   }
 
@@ -277,6 +271,7 @@ void TrackerServer::process(const Frame& frame) {
     ROS_DEBUG("sdf_tracker: %zu blocks swapped out, %zu read back", report.blocks_swapped_out,
               report.blocks_swapped_in);
   }
+  if (!report.swap_notice.empty()) ROS_INFO("sdf_tracker: %s", report.swap_notice.c_str());
   if (!report.swap_error.empty()) ROS_ERROR_THROTTLE(kThrottle_s, "sdf_tracker: %s", report.swap_error.c_str());
 
   status.status = static_cast<uint8_t>(t.status);

@@ -206,7 +206,6 @@ int run(int argc, char** argv) {
   std::vector<st::io::StampedPose> trajectory;
   std::vector<double> frame_ms, tracking_ms, fusion_ms, raycast_ms;
   size_t failed = 0, degenerate = 0;
-  bool told_of_swapping = false;
   st::tools::ProgressBar progress(sequence.size(), !args.has("quiet"));
   const auto start = std::chrono::steady_clock::now();
   for (size_t i = 0; i < sequence.size(); ++i) {
@@ -228,12 +227,7 @@ int run(int argc, char** argv) {
       if (report.fused) fusion_ms.push_back(report.fusion_ms);
       frame_ms.push_back(report.tracking_ms + report.fusion_ms + cast_ms);
     }
-    if (report.blocks_swapped_out > 0 && !told_of_swapping) {
-      told_of_swapping = true;
-      std::cout << "\nthe map reached MaxMemoryMB=" << pipeline.config().max_map_memory_mb
-                << ": blocks away from the camera go to a swap file in "
-                << pipeline.memoryBudget()->swap().directory() << " and come back when seen again\n";
-    }
+    if (!report.swap_notice.empty()) std::cout << "\n" << report.swap_notice << "\n";
     std::string message = t.message;
     if (!report.swap_error.empty()) {
       std::cerr << "\nframe " << i << ": " << report.swap_error << "\n";

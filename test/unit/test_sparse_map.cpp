@@ -370,7 +370,7 @@ TEST_F(FusionFixture, TheChunkedMeshFollowsTheMapSendingOnlyWhatChanged) {
   bool found = false;
   for (const BlockIndex& b : sparse.blockIndices()) {
     const BlockIndex below = b - BlockIndex(1, 0, 0);
-    if (ChunkedMesher::chunkOf(b) != ChunkedMesher::chunkOf(below) && sparse.find(below) &&
+    if (SparseTsdfMap::chunkOf(b) != SparseTsdfMap::chunkOf(below) && sparse.find(below) &&
         !extractBlockMesh(sparse, below).triangles.empty()) {
       moved = b;
       found = true;
@@ -385,7 +385,7 @@ TEST_F(FusionFixture, TheChunkedMeshFollowsTheMapSendingOnlyWhatChanged) {
   block.changed_at = sparse.beginRevision();
   const std::vector<ChunkedMesher::Chunk> layer = mesher.update(sparse, sparse.revision());
   EXPECT_TRUE(std::any_of(layer.begin(), layer.end(), [&](const ChunkedMesher::Chunk& chunk) {
-    return chunk.index == ChunkedMesher::chunkOf(moved - BlockIndex(1, 0, 0));
+    return chunk.index == SparseTsdfMap::chunkOf(moved - BlockIndex(1, 0, 0));
   }));
   apply(layer);
   expected.clear();

@@ -64,37 +64,34 @@ class MapMemoryBudget {
   size_t maxBytes() const { return max_bytes_; }
   const BlockSwapFile& swap() const { return swap_; }
 
-  /// Reads back into the map every swapped block that lies in the box [first, last]; returns how
-  /// many.
-  size_t restore(SparseTsdfMap* map, const SparseTsdfMap::BlockIndex& first, const SparseTsdfMap::BlockIndex& last);
-  /// When the map holds more than the budget: writes its blocks outside [keep_first, keep_last],
-  /// farthest from `centre_W` first, to the swap file and drops them, until it holds at most
-  /// kLowWater of the budget (or only blocks in the box are left). Returns how many. A block that
-  /// cannot be written stays in the map, and the error (std::runtime_error) is passed on.
-  size_t evict(SparseTsdfMap* map, const SparseTsdfMap::BlockIndex& keep_first,
-               const SparseTsdfMap::BlockIndex& keep_last, const Eigen::Vector3f& centre_W);
+  /// Reads back into the map every swapped block in `box`; returns how many.
+  size_t restore(SparseTsdfMap* map, const BlockBox& box);
+  /// When the map holds more than the budget: writes its blocks outside `keep`, farthest from
+  /// `centre_W` first, to the swap file and drops them, until it holds at most kLowWater of the
+  /// budget (or only blocks in `keep` are left). Returns how many. A block that cannot be written
+  /// stays in the map, and the error (std::runtime_error) is passed on.
+  size_t evict(SparseTsdfMap* map, const BlockBox& keep, const Eigen::Vector3f& centre_W);
+  /// What to tell the user when swapping starts.
+  std::string startNotice() const;
   /// The map with every swapped block put back: what a save or a whole mesh must read.
   SparseTsdfMap whole(const SparseTsdfMap& map) const;
   /// Forgets every swapped block (the map was cleared or replaced).
   void clear() {
     swap_.clear();
-    swapped_by_region_.clear();
+    swapped_by_chunk_.clear();
   }
 
   /// Eviction stops at this fraction of the budget, so it runs now and then, not every frame.
   static constexpr double kLowWater = 0.9;
 
  private:
-  /// Swapped blocks are listed by region of kRegionBlocks^3 blocks, so that finding those near a
-  /// view probes a few regions instead of every block of its box or every block swapped.
-  static constexpr int kRegionShift = 2;
-  static uint64_t regionOf(const SparseTsdfMap::BlockIndex& block) {
-    return SparseTsdfMap::keyOf({block.x() >> kRegionShift, block.y() >> kRegionShift, block.z() >> kRegionShift});
-  }
+  /// Swapped blocks listed by chunk (SparseTsdfMap::chunkOf), so that finding those near a view
+  /// probes a few chunks instead of every block of its box or every block swapped.
+  void listSwapped(const SparseTsdfMap::BlockIndex& block);
 
   size_t max_bytes_;
   BlockSwapFile swap_;
-  std::unordered_map<uint64_t, std::vector<SparseTsdfMap::BlockIndex>> swapped_by_region_;
+  std::unordered_map<uint64_t, std::vector<SparseTsdfMap::BlockIndex>> swapped_by_chunk_;
 };
 
 }  // namespace sdf_tracker

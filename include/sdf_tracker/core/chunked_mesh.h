@@ -10,9 +10,6 @@
 
 namespace sdf_tracker {
 
-/// Blocks along each edge of a mesh chunk: 4^3 blocks of 8^3 voxels, 0.64 m at 2 cm voxels.
-constexpr int kChunkBlocks = 4;
-
 /// A sparse map's mesh kept up to date in chunks of kChunkBlocks^3 blocks: each update re-meshes
 /// only the chunks whose triangles a change of the map can have moved, so a viewer is sent what
 /// changed, at a cost that follows the frame's reach rather than the map's size.
@@ -24,11 +21,6 @@ class ChunkedMesher {
     TriangleMesh mesh;  ///< empty: the chunk no longer holds a surface
   };
 
-  /// The chunk that holds a block.
-  static ChunkIndex chunkOf(const SparseTsdfMap::BlockIndex& block) {
-    return {floorDiv(block.x()), floorDiv(block.y()), floorDiv(block.z())};
-  }
-
   /// The chunks whose mesh may differ from what the last update returned, in a fixed order, given
   /// that `map` holds every change up to `revision` (its revision() for a live map; a copy kept by
   /// SparseTsdfMap::copyBlocksFrom holds those up to the source's revision when its changed blocks
@@ -39,8 +31,6 @@ class ChunkedMesher {
   bool restarted() const { return restarted_; }
 
  private:
-  static int floorDiv(int b) { return b >= 0 ? b / kChunkBlocks : -((-b + kChunkBlocks - 1) / kChunkBlocks); }
-
   uint64_t map_identity_ = 0;
   uint64_t meshed_revision_ = 0;
   /// Keys (SparseTsdfMap::keyOf of the chunk index) of the chunks last returned with a surface.

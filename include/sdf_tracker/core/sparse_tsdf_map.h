@@ -19,6 +19,33 @@ namespace sdf_tracker {
 constexpr int kBlockSide = 8;
 constexpr int kBlockVoxels = kBlockSide * kBlockSide * kBlockSide;
 
+/// Blocks along each edge of a chunk: the coarser unit in which the mesh is published
+/// (ChunkedMesher) and swapped blocks are listed (MapMemoryBudget). 4^3 blocks, 0.64 m at 2 cm.
+constexpr int kChunkShift = 2;
+constexpr int kChunkBlocks = 1 << kChunkShift;
+
+/// A box of block (or chunk) indices, both ends included; empty when last < first on an axis.
+struct BlockBox {
+  Eigen::Vector3i first = Eigen::Vector3i::Zero();
+  Eigen::Vector3i last = -Eigen::Vector3i::Ones();
+
+  bool empty() const { return (last.array() < first.array()).any(); }
+  bool contains(const Eigen::Vector3i& index) const {
+    return (index.array() >= first.array()).all() && (index.array() <= last.array()).all();
+  }
+  /// Indices it holds (a double: a box may hold more than size_t counts).
+  double count() const { return empty() ? 0.0 : (last - first + Eigen::Vector3i::Ones()).cast<double>().prod(); }
+  /// Calls fn(index) for every index, x fastest.
+  template <typename Fn>
+  void forEach(Fn&& fn) const {
+    for (int z = first.z(); z <= last.z(); ++z) {
+      for (int y = first.y(); y <= last.y(); ++y) {
+        for (int x = first.x(); x <= last.x(); ++x) fn(Eigen::Vector3i(x, y, z));
+      }
+    }
+  }
+};
+
 /// A cube of kBlockSide^3 voxels, x fastest, then y, then z. Cache-line aligned, so a row of
 /// voxels along x is one line and a trilinear sample inside the block reads at most four.
 struct alignas(64) VoxelBlock {
@@ -81,15 +108,25 @@ class SparseTsdfMap : public TsdfMap {
     // Written so that NaN fails the comparison.
     return lattice.cwiseAbs().maxCoeff() < static_cast<float>(kMaxBlock) * kBlockSide;
   }
-  /// The blocks [first, last] that hold the lattice voxels inside box_W; false (and nothing set)
-  /// when the box is empty or leaves the maps' reach.
-  bool blockRange(const Eigen::AlignedBox3f& box_W, BlockIndex* first, BlockIndex* last) const {
-    if (box_W.isEmpty()) return false;
+  /// The blocks that hold the lattice voxels inside box_W; empty when box_W is, or when it leaves
+  /// the maps' reach.
+  BlockBox blockRange(const Eigen::AlignedBox3f& box_W) const {
+    BlockBox blocks;
+    if (box_W.isEmpty()) return blocks;
     const Eigen::Vector3f lo = toLattice(box_W.min()), hi = toLattice(box_W.max());
-    if (!withinReach(lo) || !withinReach(hi)) return false;
-    *first = blockContaining(lo);
-    *last = blockContaining(hi);
-    return true;
+    if (!withinReach(lo) || !withinReach(hi)) return blocks;
+    blocks.first = blockContaining(lo);
+    blocks.last = blockContaining(hi);
+    return blocks;
+  }
+  /// The chunk that holds a block (kChunkBlocks^3 blocks), the chunks that overlap a box of
+  /// blocks, and a chunk's blocks.
+  static Eigen::Vector3i chunkOf(const BlockIndex& block) {
+    return {block.x() >> kChunkShift, block.y() >> kChunkShift, block.z() >> kChunkShift};
+  }
+  static BlockBox chunksOf(const BlockBox& blocks) { return {chunkOf(blocks.first), chunkOf(blocks.last)}; }
+  static BlockBox blocksOf(const Eigen::Vector3i& chunk) {
+    return {chunk * kChunkBlocks, chunk * kChunkBlocks + Eigen::Vector3i::Constant(kChunkBlocks - 1)};
   }
   /// Whether a block index lies within the maps' reach (keyOf() does not wrap).
   static bool inKeyRange(const BlockIndex& block) { return block.cwiseAbs().maxCoeff() <= kMaxBlock; }
@@ -114,32 +151,26 @@ class SparseTsdfMap : public TsdfMap {
   void forEachBlock(Fn&& fn) const {
     blocks_.forEach([&fn](uint64_t key, const VoxelBlock& block) { fn(indexOf(key), block); });
   }
-  /// Calls fn(index, block) for every block with first <= index <= last on each axis, in no
-  /// particular order, at the cost of the smaller of the box and the map: a box much smaller than
-  /// the map costs the same however large the map grows.
+  /// Calls fn(index, block) for every block in `box`, in no particular order, at the cost of the
+  /// smaller of the box and the map: a box much smaller than the map costs the same however large
+  /// the map grows.
   template <typename Fn>
-  void forEachBlockIn(const BlockIndex& first, const BlockIndex& last, Fn&& fn) const {
-    if ((last.array() < first.array()).any()) return;
-    const Eigen::Vector3d dims = (last - first + BlockIndex::Ones()).cast<double>();
-    if (dims.prod() > static_cast<double>(blocks_.size())) {
+  void forEachBlockIn(const BlockBox& box, Fn&& fn) const {
+    if (box.count() > static_cast<double>(blocks_.size())) {
       forEachBlock([&](const BlockIndex& index, const VoxelBlock& block) {
-        if ((index.array() >= first.array()).all() && (index.array() <= last.array()).all()) fn(index, block);
+        if (box.contains(index)) fn(index, block);
       });
-      return;
-    }
-    for (int z = first.z(); z <= last.z(); ++z) {
-      for (int y = first.y(); y <= last.y(); ++y) {
-        for (int x = first.x(); x <= last.x(); ++x) {
-          if (const VoxelBlock* block = find(BlockIndex(x, y, z))) fn(BlockIndex(x, y, z), *block);
-        }
-      }
+    } else {
+      box.forEach([&](const BlockIndex& index) {
+        if (const VoxelBlock* block = find(index)) fn(index, *block);
+      });
     }
   }
+  /// The same, with the blocks writable.
   template <typename Fn>
-  void forEachBlockIn(const BlockIndex& first, const BlockIndex& last, Fn&& fn) {
-    static_cast<const SparseTsdfMap*>(this)->forEachBlockIn(first, last, [&fn](const BlockIndex& index, const VoxelBlock& block) {
-      fn(index, const_cast<VoxelBlock&>(block));
-    });
+  void forEachBlockIn(const BlockBox& box, Fn&& fn) {
+    static_cast<const SparseTsdfMap*>(this)->forEachBlockIn(
+        box, [&fn](const BlockIndex& index, const VoxelBlock& block) { fn(index, const_cast<VoxelBlock&>(block)); });
   }
   /// Every block's index, in a fixed (sorted) order.
   std::vector<BlockIndex> blockIndices() const;
