@@ -15,6 +15,7 @@ add_library(sdf_tracker_core
   ${SDF_TRACKER_ROOT}/src/core/evaluation.cpp
   ${SDF_TRACKER_ROOT}/src/core/integrator.cpp
   ${SDF_TRACKER_ROOT}/src/core/io.cpp
+  ${SDF_TRACKER_ROOT}/src/core/motion_model.cpp
   ${SDF_TRACKER_ROOT}/src/core/parameters.cpp
   ${SDF_TRACKER_ROOT}/src/core/pipeline.cpp
   ${SDF_TRACKER_ROOT}/src/core/raycaster.cpp

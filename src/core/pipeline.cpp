@@ -86,7 +86,8 @@ Eigen::Vector3d SdfPipeline::volumeOriginFor(const PipelineConfig& config) {
   return -config.initial_camera_in_grid.cwiseProduct(config.volume.extent_m());
 }
 
-SdfPipeline::SdfPipeline(const PipelineConfig& config) : config_(config) {
+SdfPipeline::SdfPipeline(const PipelineConfig& config)
+    : config_(config), motion_(config.max_prediction_gap_s) {
   throwIfInvalid("pipeline config", config.validate());
   map_ = makeMap(placedVolume(config));
   budget_ = makeBudget(config, map_->type());
@@ -97,10 +98,10 @@ SdfPipeline::SdfPipeline(const PipelineConfig& config) : config_(config) {
 void SdfPipeline::reset() {
   map_->clear();
   if (budget_) budget_->clear();
-  T_W_C_ = T_W_C_last_fused_ = T_W_C_previous_ = Eigen::Isometry3d::Identity();
+  T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   map_initialised_ = false;
   consecutive_failures_ = 0;
-  tracked_since_start_ = 0;
+  motion_.clear();
 }
 
 void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map) {
@@ -108,10 +109,10 @@ void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map) {
   map_ = std::move(map);
   config_.volume = map_->config();
   budget_ = makeBudget(config_, map_->type());
-  T_W_C_ = T_W_C_last_fused_ = T_W_C_previous_ = Eigen::Isometry3d::Identity();
+  T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   map_initialised_ = true;
   consecutive_failures_ = 0;
-  tracked_since_start_ = 0;
+  motion_.clear();
 }
 
 void SdfPipeline::updateConfig(const PipelineConfig& candidate) {
@@ -124,6 +125,7 @@ void SdfPipeline::updateConfig(const PipelineConfig& candidate) {
   }
   integrator_ = std::make_unique<Integrator>(candidate.integrator);
   tracker_ = std::make_unique<Tracker>(candidate.tracker);
+  if (candidate.max_prediction_gap_s != config_.max_prediction_gap_s) motion_ = MotionModel(candidate.max_prediction_gap_s);
   config_ = candidate;
 }
 
@@ -145,20 +147,8 @@ DepthImage SdfPipeline::prepareDepth(const DepthImage& depth, const PinholeCamer
 }
 
 Eigen::Isometry3d SdfPipeline::predictPose(double timestamp_s) const {
-  if (!config_.predict_motion || tracked_since_start_ < 2 || consecutive_failures_ > 0) return T_W_C_;
-  // Frames without times count as evenly spaced.
-  double ratio = 1.0;
-  if (std::isfinite(timestamp_s) && std::isfinite(time_last_s_) && std::isfinite(time_previous_s_)) {
-    const double gap_s = timestamp_s - time_last_s_, last_gap_s = time_last_s_ - time_previous_s_;
-    if (!(gap_s > 0.0 && last_gap_s > 0.0) || gap_s > config_.max_prediction_gap_s) return T_W_C_;
-    ratio = gap_s / last_gap_s;
-  }
-  const Eigen::Isometry3d motion = T_W_C_previous_.inverse() * T_W_C_;  // in the last camera's frame
-  const Eigen::AngleAxisd rotation(motion.linear());
-  Eigen::Isometry3d scaled = Eigen::Isometry3d::Identity();
-  scaled.linear() = Eigen::AngleAxisd(rotation.angle() * ratio, rotation.axis()).toRotationMatrix();
-  scaled.translation() = motion.translation() * ratio;
-  return T_W_C_ * scaled;
+  if (!config_.predict_motion || consecutive_failures_ > 0) return T_W_C_;
+  return motion_.predict(timestamp_s);
 }
 
 void SdfPipeline::restoreNear(const Eigen::Isometry3d& T_W_C, const PinholeCamera& camera, float furthest_m,
@@ -225,7 +215,6 @@ FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCame
     report.reset = true;
   }
 
-  const Eigen::Isometry3d T_W_C_before = T_W_C_;
   if (!map_initialised_) {
     report.track.status = TrackStatus::kOk;
     report.track.T_W_C = T_W_C_;
@@ -247,15 +236,12 @@ FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCame
     if (report.track.pose_estimated) T_W_C_ = report.track.T_W_C;
     if (!report.track.tracked()) {
       ++consecutive_failures_;
+      motion_.clear();
       return report;  // never fuse on a failed frame
     }
     consecutive_failures_ = 0;
   }
-  // A tracked pose: the motion model's history.
-  T_W_C_previous_ = T_W_C_before;
-  time_previous_s_ = time_last_s_;
-  time_last_s_ = timestamp_s;
-  ++tracked_since_start_;
+  motion_.addTracked(timestamp_s, T_W_C_);
 
   const Eigen::Isometry3d motion = T_W_C_last_fused_.inverse() * T_W_C_;
   const double change = std::hypot(motion.translation().norm(), rotationAngle(motion));

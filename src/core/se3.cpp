@@ -11,28 +11,44 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& w) {
   s << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
   return s;
 }
+
+/// The coefficients of R = I + a W + b W^2 and V = I + b W + c W^2 for W = [omega]x, |omega| = theta.
+struct RodriguesCoefficients {
+  double a, b, c;
+  explicit RodriguesCoefficients(double theta) {
+    if (theta < 1e-8) {
+      a = 1.0 - theta * theta / 6.0;
+      b = 0.5 - theta * theta / 24.0;
+      c = 1.0 / 6.0 - theta * theta / 120.0;
+    } else {
+      a = std::sin(theta) / theta;
+      b = (1.0 - std::cos(theta)) / (theta * theta);
+      c = (theta - std::sin(theta)) / (theta * theta * theta);
+    }
+  }
+};
 }  // namespace
 
 Eigen::Isometry3d expSe3(const Twist& xi) {
   const Eigen::Vector3d omega = xi.head<3>();
-  const Eigen::Vector3d v = xi.tail<3>();
-  const double theta = omega.norm();
   const Eigen::Matrix3d W = skew(omega);
   const Eigen::Matrix3d W2 = W * W;
-  double a, b, c;  // R = I + a W + b W^2, V = I + b W + c W^2
-  if (theta < 1e-8) {
-    a = 1.0 - theta * theta / 6.0;
-    b = 0.5 - theta * theta / 24.0;
-    c = 1.0 / 6.0 - theta * theta / 120.0;
-  } else {
-    a = std::sin(theta) / theta;
-    b = (1.0 - std::cos(theta)) / (theta * theta);
-    c = (theta - std::sin(theta)) / (theta * theta * theta);
-  }
+  const RodriguesCoefficients k(omega.norm());
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::Matrix3d::Identity() + a * W + b * W2;
-  T.translation() = (Eigen::Matrix3d::Identity() + b * W + c * W2) * v;
+  T.linear() = Eigen::Matrix3d::Identity() + k.a * W + k.b * W2;
+  T.translation() = (Eigen::Matrix3d::Identity() + k.b * W + k.c * W2) * xi.tail<3>();
   return T;
+}
+
+Twist logSe3(const Eigen::Isometry3d& T) {
+  const Eigen::AngleAxisd rotation(T.linear());
+  const Eigen::Vector3d omega = rotation.angle() * rotation.axis();
+  const Eigen::Matrix3d W = skew(omega);
+  const RodriguesCoefficients k(omega.norm());
+  Twist xi;
+  xi.head<3>() = omega;
+  xi.tail<3>() = (Eigen::Matrix3d::Identity() + k.b * W + k.c * W * W).inverse() * T.translation();
+  return xi;
 }
 
 double rotationAngle(const Eigen::Isometry3d& T) {

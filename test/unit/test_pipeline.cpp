@@ -5,7 +5,9 @@
 #include <iostream>
 
 #include "sdf_tracker/core/parameters.h"
+#include "sdf_tracker/core/motion_model.h"
 #include "sdf_tracker/core/pipeline.h"
+#include "sdf_tracker/core/se3.h"
 #include "sdf_tracker/core/synthetic.h"
 #include "test_helpers.h"
 
@@ -97,6 +99,31 @@ TEST(Pipeline, ALostCameraHoldsItsPoseFusesNothingAndRelocalisesWhenItSeesTheMap
       T_scene_W.inverse() * synthetic::cameraPose(synthetic::Motion::kDesk, (10 + resumed_at) * kFramePeriod_s,
                                                   kDeskDuration_s);
   EXPECT_LT((pipeline.pose().translation() - truth.translation()).norm(), 0.01);
+}
+
+TEST(MotionModel, LogInvertsExpAndAConstantTwistIsExtrapolatedExactly) {
+  Twist xi;
+  xi << 0.3, -0.2, 0.5, 0.1, -0.4, 0.25;
+  const Twist back = logSe3(expSe3(xi));
+  EXPECT_LT((back - xi).norm(), 1e-12) << back.transpose();
+  EXPECT_LT(logSe3(Eigen::Isometry3d::Identity()).norm(), 1e-15);
+
+  // A camera turning while it moves: poses exp(t xi) at 0.1 s and 0.2 s predict the one at 0.35 s.
+  const Eigen::Isometry3d start = expSe3((Twist() << 0.0, 0.4, 0.0, 1.0, 0.0, 2.0).finished());
+  auto at = [&](double t_s) { return start * expSe3(t_s * xi); };
+  MotionModel motion(0.5);
+  EXPECT_TRUE(motion.predict(0.1).isApprox(Eigen::Isometry3d::Identity())) << "no pose yet";
+  motion.addTracked(0.1, at(0.1));
+  EXPECT_TRUE(motion.predict(0.2).isApprox(at(0.1))) << "one pose: no velocity yet";
+  motion.addTracked(0.2, at(0.2));
+  EXPECT_LT((motion.predict(0.35).matrix() - at(0.35).matrix()).norm(), 1e-12) << "a dropped frame is bridged";
+  EXPECT_TRUE(motion.predict(0.75).isApprox(at(0.2))) << "no prediction across more than 0.5 s";
+  EXPECT_TRUE(motion.predict(0.2).isApprox(at(0.2))) << "no prediction backwards";
+  motion.addTracked(0.3, at(0.3));
+  EXPECT_LT((motion.predict(0.4).matrix() - at(0.4).matrix()).norm(), 1e-12) << "from the last two poses";
+  motion.clear();
+  motion.addTracked(0.5, at(0.5));
+  EXPECT_TRUE(motion.predict(0.6).isApprox(at(0.5))) << "cleared: the old poses give no velocity";
 }
 
 TEST(Pipeline, MotionPredictionBridgesDroppedFramesWithFewerIterations) {

@@ -13,6 +13,7 @@
 #include "sdf_tracker/core/depth_image.h"
 #include "sdf_tracker/core/depth_undistortion.h"
 #include "sdf_tracker/core/integrator.h"
+#include "sdf_tracker/core/motion_model.h"
 #include "sdf_tracker/core/raycaster.h"
 #include "sdf_tracker/core/tracker.h"
 #include "sdf_tracker/core/tsdf_map.h"
@@ -149,11 +150,8 @@ class SdfPipeline {
   Eigen::Isometry3d T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   bool map_initialised_ = false;
   int consecutive_failures_ = 0;
-  /// The last two tracked poses and their times, for the motion model.
-  Eigen::Isometry3d T_W_C_previous_ = Eigen::Isometry3d::Identity();
-  double time_previous_s_ = std::numeric_limits<double>::quiet_NaN();
-  double time_last_s_ = std::numeric_limits<double>::quiet_NaN();
-  int tracked_since_start_ = 0;
+  /// The last tracked poses, for the prediction; cleared by a failed frame.
+  MotionModel motion_;
 };
 
 }  // namespace sdf_tracker
