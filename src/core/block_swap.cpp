@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -165,6 +166,16 @@ std::string MapMemoryBudget::startNotice() const {
   notice << "the map reached MaxMemoryMB=" << max_bytes_ / 1048576.0 << ": blocks away from the camera go to a swap file in "
          << swap_.directory() << " and come back when seen again";
   return notice.str();
+}
+
+std::string MapMemoryBudget::overrunWarning(const SparseTsdfMap& map) const {
+  if (map.memoryBytes() <= max_bytes_) return "";
+  std::ostringstream warning;
+  warning << std::fixed << std::setprecision(1) << "the map holds " << map.memoryBytes() / 1048576.0
+          << " MiB, above MaxMemoryMB=" << max_bytes_ / 1048576.0
+          << ": the blocks around the camera's view, which are never swapped, need more; raise MaxMemoryMB "
+             "or lower MaxDepth";
+  return warning.str();
 }
 
 SparseTsdfMap MapMemoryBudget::whole(const SparseTsdfMap& map) const {

@@ -175,6 +175,9 @@ void SdfPipeline::evictAwayFrom(const Eigen::Isometry3d& T_W_C, const PinholeCam
       told_of_swapping_ = true;
       report->swap_notice = budget_->startNotice();
     }
+    const std::string overrun = budget_->overrunWarning(sparse);
+    if (!overrun.empty() && !warned_of_overrun_) report->swap_warning = overrun;
+    warned_of_overrun_ = !overrun.empty();
   } catch (const std::runtime_error& e) {
     report->swap_error = e.what();
   }

@@ -272,6 +272,7 @@ void TrackerServer::process(const Frame& frame) {
               report.blocks_swapped_in);
   }
   if (!report.swap_notice.empty()) ROS_INFO("sdf_tracker: %s", report.swap_notice.c_str());
+  if (!report.swap_warning.empty()) ROS_WARN("sdf_tracker: %s", report.swap_warning.c_str());
   if (!report.swap_error.empty()) ROS_ERROR_THROTTLE(kThrottle_s, "sdf_tracker: %s", report.swap_error.c_str());
 
   status.status = static_cast<uint8_t>(t.status);

@@ -228,6 +228,7 @@ int run(int argc, char** argv) {
       frame_ms.push_back(report.tracking_ms + report.fusion_ms + cast_ms);
     }
     if (!report.swap_notice.empty()) std::cout << "\n" << report.swap_notice << "\n";
+    if (!report.swap_warning.empty()) std::cerr << "\nframe " << i << ": warning: " << report.swap_warning << "\n";
     std::string message = t.message;
     if (!report.swap_error.empty()) {
       std::cerr << "\nframe " << i << ": " << report.swap_error << "\n";

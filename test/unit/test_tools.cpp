@@ -186,6 +186,12 @@ TEST(Offline, AMemoryBoundIsReportedAndRefusedWhereItCannotHold) {
                                   " --param MapType=sparse --param MaxMemoryMB=0.5");
   EXPECT_EQ(bounded.exit_code, 0) << bounded.output;
   EXPECT_NE(bounded.output.find("(MaxMemoryMB 0.50; 0 blocks"), std::string::npos) << bounded.output;
+  // Four frames of one view: every block is near the camera, none can go, and the user hears so once.
+  const std::string overrun = "warning: the map holds ";
+  const size_t warned_at = bounded.output.find(overrun);
+  ASSERT_NE(warned_at, std::string::npos) << bounded.output;
+  EXPECT_NE(bounded.output.find("above MaxMemoryMB=0.5", warned_at), std::string::npos) << bounded.output;
+  EXPECT_EQ(bounded.output.find(overrun, warned_at + 1), std::string::npos) << "warned more than once";
 
   expectRefused(sequence, "--param MaxMemoryMB=64", {"MaxMemoryMB=64 applies to MapType=sparse only"});
   expectRefused(sequence, "--param MapType=sparse --param MaxMemoryMB=64 --param SwapDirectory=/nonexistent/swap",

@@ -73,6 +73,9 @@ class MapMemoryBudget {
   size_t evict(SparseTsdfMap* map, const BlockBox& keep, const Eigen::Vector3f& centre_W);
   /// What to tell the user when swapping starts.
   std::string startNotice() const;
+  /// Empty while the map holds at most the budget; else why not, for the user: eviction spares
+  /// the blocks around the camera's view, and those alone can need more.
+  std::string overrunWarning(const SparseTsdfMap& map) const;
   /// The map with every swapped block put back: what a save or a whole mesh must read.
   SparseTsdfMap whole(const SparseTsdfMap& map) const;
   /// Forgets every swapped block (the map was cleared or replaced).

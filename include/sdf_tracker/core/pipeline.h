@@ -70,6 +70,9 @@ struct FrameReport {
   size_t blocks_swapped_out = 0;
   /// Set on the frame at which swapping starts: what to tell the user, once.
   std::string swap_notice;
+  /// Set on the frame at which the map stays above MaxMemoryMB after swapping, once until it is
+  /// back within: why, and what to change.
+  std::string swap_warning;
   /// The swap file failed (e.g. the disk is full): what and where. Blocks that could not be
   /// written stay in memory; blocks that could not be read back stay in the file.
   std::string swap_error;
@@ -146,6 +149,7 @@ class SdfPipeline {
   /// Present with a sparse map and max_map_memory_mb > 0.
   std::unique_ptr<MapMemoryBudget> budget_;
   bool told_of_swapping_ = false;
+  bool warned_of_overrun_ = false;
   Eigen::Isometry3d T_W_C_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   bool map_initialised_ = false;
