@@ -1,16 +1,22 @@
 #include "sdf_tracker/ros/map_services.h"
 
+#include <filesystem>
+#include <sstream>
+
+#include "sdf_tracker/core/sparse_tsdf_map.h"
 #include "sdf_tracker/core/surface.h"
 
 namespace sdf_tracker_ros {
 
 namespace st = sdf_tracker;
 
-MapServices::MapServices(ros::NodeHandle pnh, TrackerState& state, const NodeOptions& options)
-    : state_(state), options_(options) {
+MapServices::MapServices(ros::NodeHandle pnh, TrackerState& state, const NodeOptions& options,
+                         std::function<Eigen::Isometry3d()> T_map_W)
+    : state_(state), options_(options), T_map_W_(std::move(T_map_W)) {
   reset_srv_ = pnh.advertiseService("reset", &MapServices::reset, this);
   save_mesh_srv_ = pnh.advertiseService("save_mesh", &MapServices::saveMesh, this);
   save_volume_srv_ = pnh.advertiseService("save_volume", &MapServices::saveVolume, this);
+  save_volume_region_srv_ = pnh.advertiseService("save_volume_region", &MapServices::saveVolumeRegion, this);
   load_volume_srv_ = pnh.advertiseService("load_volume", &MapServices::loadVolume, this);
   // A node killed while writing leaves temporaries beside its files: remove them now.
   for (const std::string& path : {options_.trajectory_file, options_.mesh_file, options_.cloud_file,
@@ -60,7 +66,8 @@ void MapServices::writeAtShutdown() {
   }
 }
 
-bool MapServices::answer(sdf_tracker::SavePath::Response& res, const std::function<std::string()>& action) {
+template <typename Response>
+bool MapServices::answer(Response& res, const std::function<std::string()>& action) {
   try {
     res.message = action();
     res.success = true;
@@ -98,6 +105,34 @@ bool MapServices::saveVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
     st::io::writeMap(path, *copyMap(&trajectory));
     writeTrajectory(trajectory);
     return "wrote the map to " + path;
+  });
+}
+
+bool MapServices::saveVolumeRegion(sdf_tracker::SaveRegion::Request& req, sdf_tracker::SaveRegion::Response& res) {
+  return answer(res, [&] {
+    const std::string path = outputPath(req.path, "sdf_volume.vti");
+    if (std::filesystem::path(path).extension() != ".vti") {
+      throw std::invalid_argument("save_volume_region writes .vti files; got path \"" + path + "\"");
+    }
+    const Eigen::Vector3d min_map(req.min.x, req.min.y, req.min.z), max_map(req.max.x, req.max.y, req.max.z);
+    if (!min_map.allFinite() || !max_map.allFinite() || !(min_map.array() < max_map.array()).all()) {
+      std::ostringstream msg;
+      msg << "save_volume_region needs min < max along x, y and z; got min (" << min_map.transpose() << "), max ("
+          << max_map.transpose() << ")";
+      throw std::invalid_argument(msg.str());
+    }
+    // The box's corners in the tracker's world, and the box along its axes that holds them.
+    const Eigen::Isometry3d T_W_map = T_map_W_().inverse();
+    const Eigen::AlignedBox3d box_map(min_map, max_map);
+    Eigen::AlignedBox3d box_W;
+    for (int corner = 0; corner < 8; ++corner) {
+      box_W.extend(T_W_map * box_map.corner(static_cast<Eigen::AlignedBox3d::CornerType>(corner)));
+    }
+    const st::TsdfVolume region = st::toDenseVolume(*copyMap(nullptr), box_W);
+    st::io::writeVti(path, region);
+    const Eigen::Vector3i dims = region.dims();
+    return "wrote " + std::to_string(dims.x()) + "x" + std::to_string(dims.y()) + "x" + std::to_string(dims.z()) +
+           " voxels to " + path;
   });
 }
 

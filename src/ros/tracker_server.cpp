@@ -50,8 +50,8 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
   poses_ = std::make_unique<PoseBroadcaster>(nh_, pnh_, options_);
   status_pub_ = pnh_.advertise<sdf_tracker::TrackingStatus>("status", 10);
   denoised_pub_ = it_.advertise(options_.camera_name + "/depth/image_denoised", 1);
-  services_ = std::make_unique<MapServices>(pnh_, state_, options_);
   const PoseBroadcaster* poses = poses_.get();
+  services_ = std::make_unique<MapServices>(pnh_, state_, options_, [poses] { return poses->T_map_W(); });
   map_publisher_ = std::make_unique<MapPublisher>(
       pnh_, state_.mutex, [this]() -> const st::TsdfMap* { return &state_.pipeline->map(); },
       [poses] { return poses->T_map_W(); },

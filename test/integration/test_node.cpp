@@ -30,6 +30,7 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include "sdf_tracker/SavePath.h"
+#include "sdf_tracker/SaveRegion.h"
 #include "sdf_tracker/TrackingStatus.h"
 #include "sdf_tracker/core/evaluation.h"
 #include "sdf_tracker/core/io.h"
@@ -250,6 +251,40 @@ TEST_F(NodeTest, AMapSavedBySaveVolumeIsTrackedInAfterLoadVolume) {
   ASSERT_TRUE(ros::service::call("sdf_tracker/load_volume", load));
   EXPECT_FALSE(load.response.success);
   EXPECT_NE(load.response.message.find(load.request.path), std::string::npos) << load.response.message;
+}
+
+TEST_F(NodeTest, SaveVolumeRegionWritesTheBoxGivenInTheMapFrame) {
+  ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
+  for (int i = 0; i < 3; ++i) publishDeskFrame(600.0 + i / 30.0, i / 30.0);
+  // In the map frame (REP 103: x forward, y left, z up from the first camera): 0.6 to 1.4 m ahead,
+  // 0.3 m either side, 0.2 m below to 0.4 m above the camera.
+  sdf_tracker::SaveRegion save;
+  save.request.path = "/tmp/sdf_tracker_node_test_region.vti";
+  save.request.min.x = 0.6, save.request.min.y = -0.3, save.request.min.z = -0.2;
+  save.request.max.x = 1.4, save.request.max.y = 0.3, save.request.max.z = 0.4;
+  ASSERT_TRUE(ros::service::call("sdf_tracker/save_volume_region", save));
+  ASSERT_TRUE(save.response.success) << save.response.message;
+  // The file is in the tracker's own axes (the first camera's optical frame: x right, y down,
+  // z forward): the same box, within a voxel at each end.
+  const st::TsdfVolume region = st::io::readVti(save.request.path);
+  const st::VolumeConfig& c = region.config();
+  const Eigen::Vector3d lo = c.origin_W, hi = c.origin_W + (c.dims - Eigen::Vector3i::Ones()).cast<double>() * c.voxel_size_m;
+  const Eigen::Vector3d want_lo(-0.3, -0.4, 0.6), want_hi(0.3, 0.2, 1.4);
+  EXPECT_LT((lo - want_lo).cwiseAbs().maxCoeff(), c.voxel_size_m + 1e-9) << lo.transpose();
+  EXPECT_LT((hi - want_hi).cwiseAbs().maxCoeff(), c.voxel_size_m + 1e-9) << hi.transpose();
+  EXPECT_NE(save.response.message.find(save.request.path), std::string::npos) << save.response.message;
+
+  // A box inside out, and a file that is not a .vti: refused, saying what was given.
+  std::swap(save.request.min.x, save.request.max.x);
+  ASSERT_TRUE(ros::service::call("sdf_tracker/save_volume_region", save));
+  EXPECT_FALSE(save.response.success);
+  EXPECT_NE(save.response.message.find("min < max"), std::string::npos) << save.response.message;
+  EXPECT_NE(save.response.message.find("1.4"), std::string::npos) << save.response.message;
+  std::swap(save.request.min.x, save.request.max.x);
+  save.request.path = "/tmp/sdf_tracker_node_test_region.ply";
+  ASSERT_TRUE(ros::service::call("sdf_tracker/save_volume_region", save));
+  EXPECT_FALSE(save.response.success);
+  EXPECT_NE(save.response.message.find(save.request.path), std::string::npos) << save.response.message;
 }
 
 /// Collects ~mesh_blocks messages from its own subscription.

@@ -1,23 +1,29 @@
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 
 #include <ros/ros.h>
 #include <std_srvs/Empty.h>
 
+#include <Eigen/Geometry>
+
 #include "sdf_tracker/SavePath.h"
+#include "sdf_tracker/SaveRegion.h"
 #include "sdf_tracker/ros/parameters.h"
 #include "sdf_tracker/ros/tracker_state.h"
 
 namespace sdf_tracker_ros {
 
-/// The node's services (~reset, ~save_mesh, ~save_volume, ~load_volume) and its files written at
-/// shut-down (trajectory, mesh, cloud, OutputTriangles, OutputVolume). Saving copies the map under
-/// the lock and extracts from the copy, so tracking waits only for the copy.
+/// The node's services (~reset, ~save_mesh, ~save_volume, ~save_volume_region, ~load_volume) and
+/// its files written at shut-down (trajectory, mesh, cloud, OutputTriangles, OutputVolume). Saving
+/// copies the map under the lock and extracts from the copy, so tracking waits only for the copy.
 class MapServices {
  public:
-  MapServices(ros::NodeHandle pnh, TrackerState& state, const NodeOptions& options);
+  /// `T_map_W` gives the map frame's pose in the tracker's world (for boxes given in the map frame).
+  MapServices(ros::NodeHandle pnh, TrackerState& state, const NodeOptions& options,
+              std::function<Eigen::Isometry3d()> T_map_W);
 
   /// Writes every file the options ask for; logs (never throws) what fails.
   void writeAtShutdown();
@@ -26,9 +32,11 @@ class MapServices {
   bool reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&);
   bool saveMesh(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res);
   bool saveVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res);
+  bool saveVolumeRegion(sdf_tracker::SaveRegion::Request& req, sdf_tracker::SaveRegion::Response& res);
   bool loadVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res);
   /// Runs a service's action; its text (or the exception's) becomes the response's message.
-  static bool answer(sdf_tracker::SavePath::Response& res, const std::function<std::string()>& action);
+  template <typename Response>
+  static bool answer(Response& res, const std::function<std::string()>& action);
   /// A copy of the map and the trajectory so far, taken under the lock.
   std::unique_ptr<sdf_tracker::TsdfMap> copyMap(std::vector<sdf_tracker::io::StampedPose>* trajectory);
   void writeTrajectory(const std::vector<sdf_tracker::io::StampedPose>& trajectory) const;
@@ -36,7 +44,8 @@ class MapServices {
 
   TrackerState& state_;
   NodeOptions options_;
-  ros::ServiceServer reset_srv_, save_mesh_srv_, save_volume_srv_, load_volume_srv_;
+  std::function<Eigen::Isometry3d()> T_map_W_;
+  ros::ServiceServer reset_srv_, save_mesh_srv_, save_volume_srv_, save_volume_region_srv_, load_volume_srv_;
 };
 
 }  // namespace sdf_tracker_ros
