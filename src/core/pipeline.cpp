@@ -189,6 +189,16 @@ std::unique_ptr<TsdfMap> SdfPipeline::copyWholeMap() const {
 }
 
 FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s) {
+  return process(depth, camera, timestamp_s, std::nullopt);
+}
+
+FrameReport SdfPipeline::processFrameAtPose(const DepthImage& depth, const PinholeCamera& camera,
+                                            const Eigen::Isometry3d& T_W_C, double timestamp_s) {
+  return process(depth, camera, timestamp_s, T_W_C);
+}
+
+FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s,
+                                 const std::optional<Eigen::Isometry3d>& given_T_W_C) {
   FrameReport report;
   report.track.T_W_C = T_W_C_;
   const std::string mismatch = camera.sizeMismatch(depth.width(), depth.height());
@@ -219,25 +229,30 @@ FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCame
   }
 
   if (!map_initialised_) {
+    if (given_T_W_C) T_W_C_ = T_W_C_last_fused_ = *given_T_W_C;
     report.track.status = TrackStatus::kOk;
     report.track.T_W_C = T_W_C_;
     report.track.message = "first frame: map initialised at the start pose";
     report.initialised_map = true;
   } else {
     const auto start = std::chrono::steady_clock::now();
-    const Eigen::Isometry3d predicted = predictPose(timestamp_s);
+    const Eigen::Isometry3d predicted = given_T_W_C ? *given_T_W_C : predictPose(timestamp_s);
     // Swapped blocks the frame may see come back first; the held pose's too, for the retry below.
     restoreNear(predicted, ideal_camera, furthest_m, &report);
     restoreNear(T_W_C_, ideal_camera, furthest_m, &report);
     report.track = tracker_->track(filtered, ideal_camera, *map_, predicted);
-    if (!report.track.tracked() && !predicted.isApprox(T_W_C_)) {
+    if (!given_T_W_C && !report.track.tracked() && !predicted.isApprox(T_W_C_)) {
       // The prediction may have led astray (the camera stopped or turned): try from the last pose.
       TrackResult from_last = tracker_->track(filtered, ideal_camera, *map_, T_W_C_);
       if (from_last.tracked()) report.track = std::move(from_last);
     }
     report.tracking_ms = millisecondsSince(start);
-    if (report.track.pose_estimated) T_W_C_ = report.track.T_W_C;
-    if (!report.track.tracked()) {
+    if (given_T_W_C) {
+      T_W_C_ = *given_T_W_C;  // the estimate is reported; the given pose is fused
+    } else if (report.track.pose_estimated) {
+      T_W_C_ = report.track.T_W_C;
+    }
+    if (!given_T_W_C && !report.track.tracked()) {
       ++consecutive_failures_;
       motion_.clear();
       return report;  // never fuse on a failed frame

@@ -57,6 +57,11 @@ Tracks a depth camera through a TUM-layout sequence and reconstructs the scene.
   --save-volume         also write the map as sdf_volume.vti (ParaView) and triangles.obj
   --volume-region X0,Y0,Z0,X1,Y1,Z1  with --save-volume: only the voxels in this box (metres,
                         the map's frame: the first camera's), e.g. one room of a large map
+  --fuse-ground-truth   measure the tracker alone: track each frame from its true pose
+                        (groundtruth.txt) and fuse it there, whatever the tracker found; the
+                        summary gives each frame's error, free of drift (frames without a
+                        ground-truth pose within 0.02 s are skipped). For exact ground truth
+                        (synthetic sequences): a recording's adds its own calibration and timing
   --raycast             also ray-cast the virtual depth view every frame (as the node's
                         image_denoised) and time it
   --quiet               no progress bar
@@ -111,12 +116,51 @@ double percentile(std::vector<double> values, double q) {
   return values[k];
 }
 
+/// For --fuse-ground-truth: each frame's ground-truth pose (associated within 0.02 s) relative to
+/// the first associated frame's, which is the tracker's start pose; none for frames without one.
+std::vector<std::optional<Eigen::Isometry3d>> truePosesInFirstFrame(const st::TumSequence& sequence) {
+  if (sequence.groundTruth().empty()) {
+    throw std::invalid_argument("--fuse-ground-truth needs the sequence's groundtruth.txt, which is missing or empty");
+  }
+  std::vector<st::io::StampedPose> frames;
+  for (size_t i = 0; i < sequence.size(); ++i) frames.push_back({sequence.timestamp(i), Eigen::Isometry3d::Identity()});
+  std::vector<std::optional<Eigen::Isometry3d>> poses(sequence.size());
+  std::optional<Eigen::Isometry3d> first_inverse;
+  for (const auto& [frame, truth] : st::evaluation::associate(frames, sequence.groundTruth())) {
+    const Eigen::Isometry3d& T_gt = sequence.groundTruth()[truth].T_W_C;
+    if (!first_inverse) first_inverse = T_gt.inverse();
+    poses[frame] = *first_inverse * T_gt;
+  }
+  if (!first_inverse) {
+    throw std::invalid_argument("--fuse-ground-truth: no frame has a ground-truth pose within 0.02 s of its timestamp");
+  }
+  return poses;
+}
+
+/// The summary's line for --fuse-ground-truth.
+std::string formatSingleFrameErrors(std::vector<double> errors_m, size_t without_ground_truth) {
+  std::ostringstream out;
+  out << "tracker alone (--fuse-ground-truth): ";
+  if (errors_m.empty()) {
+    out << "no frame tracked\n";
+    return out.str();
+  }
+  const size_t over_1cm = std::count_if(errors_m.begin(), errors_m.end(), [](double e) { return e > 0.01; });
+  out << std::setprecision(3) << "translation error per frame (mm) mean " << 1000 * st::evaluation::summarize(errors_m).mean
+      << ", median " << 1000 * percentile(errors_m, 0.5) << ", p90 " << 1000 * percentile(errors_m, 0.9) << ", p99 "
+      << 1000 * percentile(errors_m, 0.99) << ", max " << 1000 * percentile(errors_m, 1.0) << "; over 1 cm: " << over_1cm
+      << " of " << errors_m.size() << " frames";
+  if (without_ground_truth > 0) out << "; " << without_ground_truth << " frames without ground truth skipped";
+  out << "\n";
+  return out.str();
+}
+
 int run(int argc, char** argv) {
   const st::tools::CommandLine args(
       argc, argv,
       {"sequence", "output", "preset", "param", "frames", "threads", "depth-factor", "intrinsics", "distortion",
        "load-volume", "volume-region"},
-      {"save-map", "save-volume", "raycast", "quiet", "list-params", "help"});
+      {"save-map", "save-volume", "fuse-ground-truth", "raycast", "quiet", "list-params", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
     return 0;
@@ -178,6 +222,9 @@ int run(int argc, char** argv) {
     if (!args.has("save-volume")) throw std::invalid_argument("--volume-region applies to --save-volume, which is not given");
     volume_region = parseRegion(args.get("volume-region"));
   }
+  // --fuse-ground-truth: each frame's true pose in the tracker's world (the first such frame's).
+  std::vector<std::optional<Eigen::Isometry3d>> true_T_W_C;
+  if (args.has("fuse-ground-truth")) true_T_W_C = truePosesInFirstFrame(sequence);
   const std::vector<std::string> summaries = {"summary.txt", "summary.json"};
   st::tools::OutputFolder output(output_dir, {"trajectory.txt", "frames.csv", "mesh.ply", "cloud.ply", "sdf_volume.vti",
                                               "map.sdfmap", "triangles.obj", "trajectory.png", "summary.txt", "summary.json"});
@@ -208,13 +255,25 @@ int run(int argc, char** argv) {
   size_t failed = 0, degenerate = 0;
   st::tools::ProgressBar progress(sequence.size(), !args.has("quiet"));
   const auto start = std::chrono::steady_clock::now();
+  std::vector<double> single_frame_errors_m;  // --fuse-ground-truth
+  size_t without_ground_truth = 0;
   for (size_t i = 0; i < sequence.size(); ++i) {
+    if (!true_T_W_C.empty() && !true_T_W_C[i]) {
+      ++without_ground_truth;
+      continue;
+    }
     const st::DepthImage depth = sequence.depth(i);
-    const st::FrameReport report = pipeline.processFrame(depth, camera, sequence.timestamp(i));
+    const st::FrameReport report = true_T_W_C.empty()
+                                       ? pipeline.processFrame(depth, camera, sequence.timestamp(i))
+                                       : pipeline.processFrameAtPose(depth, camera, *true_T_W_C[i], sequence.timestamp(i));
     const st::TrackResult& t = report.track;
     if (!t.tracked()) ++failed;
     if (t.tracked() && t.status == st::TrackStatus::kDegenerate) ++degenerate;
-    trajectory.push_back({sequence.timestamp(i), pipeline.pose()});
+    // The estimate: with --fuse-ground-truth, where the tracker took the frame, not the fused pose.
+    trajectory.push_back({sequence.timestamp(i), true_T_W_C.empty() ? pipeline.pose() : t.T_W_C});
+    if (!true_T_W_C.empty() && !report.initialised_map && t.tracked()) {
+      single_frame_errors_m.push_back((t.T_W_C.translation() - true_T_W_C[i]->translation()).norm());
+    }
     double cast_ms = 0.0;
     if (args.has("raycast")) {
       const auto cast_start = std::chrono::steady_clock::now();
@@ -308,6 +367,15 @@ int run(int argc, char** argv) {
        << ",\n  \"swapped_mb\": "
        << jsonNumber(pipeline.memoryBudget() ? pipeline.memoryBudget()->swap().bytesOnDisk() / 1048576.0 : 0.0)
        << ",\n  \"elapsed_s\": " << jsonNumber(elapsed_s);
+  if (!true_T_W_C.empty()) {
+    summary << formatSingleFrameErrors(single_frame_errors_m, without_ground_truth);
+    if (!single_frame_errors_m.empty()) {
+      const st::evaluation::ErrorStats e = st::evaluation::summarize(single_frame_errors_m);
+      json << ",\n  \"single_frame_error_m\": {\"rmse\": " << jsonNumber(e.rmse) << ", \"mean\": " << jsonNumber(e.mean)
+           << ", \"median\": " << jsonNumber(e.median) << ", \"p90\": " << jsonNumber(percentile(single_frame_errors_m, 0.9))
+           << ", \"max\": " << jsonNumber(e.max) << "}";
+    }
+  }
   if (!sequence.groundTruth().empty()) {
     try {
       const auto accuracy = st::tools::evaluateAccuracy(trajectory, sequence.groundTruth());

@@ -126,6 +126,31 @@ TEST(MotionModel, LogInvertsExpAndAConstantTwistIsExtrapolatedExactly) {
   EXPECT_TRUE(motion.predict(0.6).isApprox(at(0.5))) << "cleared: the old poses give no velocity";
 }
 
+TEST(Pipeline, AFrameAtAGivenPoseIsTrackedFromItButFusedThere) {
+  // A map made at the true poses; then a frame handed over with a pose 3 cm off the truth: the
+  // tracker's estimate goes back to the truth, the frame is fused at the given pose.
+  const PinholeCamera camera = test::testCamera();
+  SdfPipeline pipeline(smallRoomPipeline());
+  const Eigen::Isometry3d T_scene_W = synthetic::cameraPose(synthetic::Motion::kDesk, 0.0, kDeskDuration_s);
+  auto truth = [&](int i) {
+    return T_scene_W.inverse() * synthetic::cameraPose(synthetic::Motion::kDesk, i * kFramePeriod_s, kDeskDuration_s);
+  };
+  auto frame = [&](int i) {
+    return test::renderRoom(synthetic::cameraPose(synthetic::Motion::kDesk, i * kFramePeriod_s, kDeskDuration_s), camera);
+  };
+  for (int i = 0; i < 5; ++i) {
+    const FrameReport report = pipeline.processFrameAtPose(frame(i), camera, truth(i), i * kFramePeriod_s);
+    EXPECT_TRUE(report.fused) << "frame " << i;
+    EXPECT_TRUE(pipeline.pose().isApprox(truth(i))) << "frame " << i;
+  }
+  const Eigen::Isometry3d given = Eigen::Translation3d(0.03, 0.0, 0.0) * truth(5);
+  const FrameReport report = pipeline.processFrameAtPose(frame(5), camera, given, 5 * kFramePeriod_s);
+  ASSERT_TRUE(report.track.tracked()) << report.track.message;
+  EXPECT_LT((report.track.T_W_C.translation() - truth(5).translation()).norm(), 0.005) << "the estimate";
+  EXPECT_TRUE(pipeline.pose().isApprox(given)) << "the fused pose is the given one";
+  EXPECT_TRUE(report.fused);
+}
+
 TEST(Pipeline, MotionPredictionBridgesDroppedFramesWithFewerIterations) {
   // Every third frame of the fast path, with its real timestamps: the camera moves three frames'
   // worth between the frames the tracker sees.

@@ -134,6 +134,24 @@ TEST(Offline, NodeOnlyParametersAreRefusedNotIgnored) {
   EXPECT_NE(run.output.find("FocalLengthX: read by the ROS node only"), std::string::npos) << run.output;
 }
 
+TEST(Offline, FuseGroundTruthMeasuresTheTrackerAloneAndNeedsGroundTruth) {
+  const std::string sequence = shortSequence(8);
+  const std::string out = test::scratchDirectory("fuse_gt");
+  const ToolRun run = offline("--sequence " + sequence + " --output " + out + " --fuse-ground-truth");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  // Exact ground truth and a desk scene that constrains every direction: no frame is off by 1 cm.
+  EXPECT_NE(run.output.find("tracker alone (--fuse-ground-truth): translation error per frame (mm) mean "),
+            std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("over 1 cm: 0 of 7 frames"), std::string::npos) << run.output;
+  std::ifstream json(out + "/summary.json");
+  const std::string summary((std::istreambuf_iterator<char>(json)), std::istreambuf_iterator<char>());
+  EXPECT_NE(summary.find("\"single_frame_error_m\""), std::string::npos) << summary;
+
+  fs::remove(sequence + "/groundtruth.txt");
+  expectRefused(sequence, "--fuse-ground-truth", {"--fuse-ground-truth needs the sequence's groundtruth.txt"});
+}
+
 TEST(Offline, TooFewFramesForAccuracyStillSucceedWithASummary) {
   const std::string out = test::scratchDirectory("few");
   const ToolRun run = offline("--sequence " + shortSequence(5) + " --output " + out + " --frames 2");

@@ -94,6 +94,14 @@ class SdfPipeline {
   FrameReport processFrame(const DepthImage& depth, const PinholeCamera& camera,
                            double timestamp_s = std::numeric_limits<double>::quiet_NaN());
 
+  /// Measures the tracker alone: tracks the frame from the given pose T_W_C (e.g. the true one),
+  /// reports where the tracker took it, and then fuses the frame at the given pose, whatever the
+  /// tracker did. Fed the true poses, the report's error is the tracker's own against a map fused
+  /// at true poses, free of the drift that fusion at estimated poses adds. The first frame's
+  /// given pose places the map (sdf_tracker_offline --fuse-ground-truth).
+  FrameReport processFrameAtPose(const DepthImage& depth, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C,
+                                 double timestamp_s = std::numeric_limits<double>::quiet_NaN());
+
   /// Camera to world at the last accepted frame.
   const Eigen::Isometry3d& pose() const { return T_W_C_; }
   /// The map in memory (a TsdfVolume or a SparseTsdfMap, per config().volume.type): with a
@@ -128,6 +136,9 @@ class SdfPipeline {
   static Eigen::Vector3d volumeOriginFor(const PipelineConfig& config);
 
  private:
+  /// processFrame, or with given_T_W_C processFrameAtPose.
+  FrameReport process(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s,
+                      const std::optional<Eigen::Isometry3d>& given_T_W_C);
   /// The image as the tracker and integrator take it: undistorted, depths out of range removed.
   DepthImage prepareDepth(const DepthImage& depth, const PinholeCamera& camera);
   /// Where the camera should be at `timestamp_s` if it kept its last motion; the last pose when
