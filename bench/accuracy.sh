@@ -40,7 +40,7 @@ for sequence in "${sequences[@]}"; do
   run "off_tracking_noise_weights" "$sequence" --param TrackingSensorWeights=false
   run "off_normalized_residuals" "$sequence" --param NormalizeResiduals=false
   run "off_fusion_noise_weights" "$sequence" --param DepthWeighting=constant
-  run "off_symmetric_band" "$sequence" --param NegativeTruncationDistance=-0.04
+  run "with_symmetric_band" "$sequence" --param NegativeTruncationDistance=-0.1
   echo "CellSize x truncation"
   for cell in 0.01 0.015 0.02 0.03; do
     cells=$(awk -v c="$cell" 'BEGIN { printf "%d", 5.12 / c + 0.5 }')

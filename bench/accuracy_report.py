@@ -23,7 +23,7 @@ ABLATION = [("off_undistortion", "lens distortion not removed"),
             ("off_tracking_noise_weights", "no depth-noise weights in tracking"),
             ("off_normalized_residuals", "residuals not divided by the gradient norm"),
             ("off_fusion_noise_weights", "constant fusion weights"),
-            ("off_symmetric_band", "negative truncation -0.04 m (paper) instead of -0.1 m")]
+            ("with_symmetric_band", "negative truncation -0.1 m (a symmetric band, the default until 2026-11-23) instead of -0.06 m")]
 
 
 def load(runs_dir):

@@ -212,7 +212,7 @@ std::vector<ParameterSpec> buildTable() {
                             leftOpen(0.0, 10.0), {0.1, 0.1, 0.08}, kAtStart, kAll,
                             [](auto& s) -> auto& { return s.pipeline.volume.positive_truncation_m; }));
   t.push_back(bound<double>("NegativeTruncationDistance", "m", "Dmin: voxels further behind the surface are not updated",
-                            rightOpen(-10.0, 0.0), {-0.1, -0.06, -0.04}, kLive, kAll,
+                            rightOpen(-10.0, 0.0), {-0.06, -0.06, -0.04}, kLive, kAll,
                             [](auto& s) -> auto& { return s.pipeline.integrator.negative_truncation_m; }));
   t.push_back(bound<double>("RobustStatisticCoefficient", "", "Huber threshold as a fraction of Dmax",
                             leftOpen(0.0, 10.0), same(0.02), kLive, kAll,
