@@ -104,6 +104,16 @@ def main(walk, work, report):
         ax.set_ylabel(label)
         ax.grid(True, alpha=0.3)
         ax.legend()
+    true_poses = os.path.join(work, "sparse_true_poses", "summary.json")
+    if os.path.exists(true_poses):
+        with open(true_poses) as f:
+            e = json.load(f).get("single_frame_error_m")
+        if e:
+            lines += ["", "The tracker alone (`sparse_true_poses`: `--fuse-ground-truth`, each frame tracked from its "
+                      "true pose against a map fused at the true poses), translation error per frame: mean %.2f mm, "
+                      "median %.2f, p90 %.2f, max %.1f; %d of %d frames over 1 cm." % (
+                          1000 * e["mean"], 1000 * e["median"], 1000 * e["p90"], 1000 * e["max"],
+                          e["frames_over_1cm"], e["frames"])]
     plot = os.path.splitext(report)[0] + ".png"
     fig.tight_layout()
     fig.savefig(plot, dpi=90)

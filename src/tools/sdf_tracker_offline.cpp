@@ -137,23 +137,40 @@ std::vector<std::optional<Eigen::Isometry3d>> truePosesInFirstFrame(const st::Tu
   return poses;
 }
 
-/// The summary's line for --fuse-ground-truth.
-std::string formatSingleFrameErrors(std::vector<double> errors_m, size_t without_ground_truth) {
-  std::ostringstream out;
-  out << "tracker alone (--fuse-ground-truth): ";
-  if (errors_m.empty()) {
-    out << "no frame tracked\n";
+/// --fuse-ground-truth's figures: each frame's translation error against its true pose.
+struct SingleFrameErrors {
+  explicit SingleFrameErrors(const std::vector<double>& errors_m)
+      : stats(st::evaluation::summarize(errors_m)),
+        p90_m(percentile(errors_m, 0.9)),
+        p99_m(percentile(errors_m, 0.99)),
+        over_1cm(std::count_if(errors_m.begin(), errors_m.end(), [](double e) { return e > 0.01; })) {}
+  st::evaluation::ErrorStats stats;
+  double p90_m, p99_m;
+  size_t over_1cm;
+
+  std::string summaryLine(size_t without_ground_truth) const {
+    std::ostringstream out;
+    out << "tracker alone (--fuse-ground-truth): ";
+    if (stats.count == 0) {
+      out << "no frame tracked\n";
+      return out.str();
+    }
+    out << std::setprecision(3) << "translation error per frame (mm) mean " << 1000 * stats.mean << ", median "
+        << 1000 * stats.median << ", p90 " << 1000 * p90_m << ", p99 " << 1000 * p99_m << ", max " << 1000 * stats.max
+        << "; over 1 cm: " << over_1cm << " of " << stats.count << " frames";
+    if (without_ground_truth > 0) out << "; " << without_ground_truth << " frames without ground truth skipped";
+    out << "\n";
     return out.str();
   }
-  const size_t over_1cm = std::count_if(errors_m.begin(), errors_m.end(), [](double e) { return e > 0.01; });
-  out << std::setprecision(3) << "translation error per frame (mm) mean " << 1000 * st::evaluation::summarize(errors_m).mean
-      << ", median " << 1000 * percentile(errors_m, 0.5) << ", p90 " << 1000 * percentile(errors_m, 0.9) << ", p99 "
-      << 1000 * percentile(errors_m, 0.99) << ", max " << 1000 * percentile(errors_m, 1.0) << "; over 1 cm: " << over_1cm
-      << " of " << errors_m.size() << " frames";
-  if (without_ground_truth > 0) out << "; " << without_ground_truth << " frames without ground truth skipped";
-  out << "\n";
-  return out.str();
-}
+  std::string json() const {
+    using st::tools::jsonNumber;
+    std::ostringstream out;
+    out << "{\"rmse\": " << jsonNumber(stats.rmse) << ", \"mean\": " << jsonNumber(stats.mean) << ", \"median\": "
+        << jsonNumber(stats.median) << ", \"p90\": " << jsonNumber(p90_m) << ", \"max\": " << jsonNumber(stats.max)
+        << ", \"frames_over_1cm\": " << over_1cm << ", \"frames\": " << stats.count << "}";
+    return out.str();
+  }
+};
 
 int run(int argc, char** argv) {
   const st::tools::CommandLine args(
@@ -368,13 +385,9 @@ int run(int argc, char** argv) {
        << jsonNumber(pipeline.memoryBudget() ? pipeline.memoryBudget()->swap().bytesOnDisk() / 1048576.0 : 0.0)
        << ",\n  \"elapsed_s\": " << jsonNumber(elapsed_s);
   if (!true_T_W_C.empty()) {
-    summary << formatSingleFrameErrors(single_frame_errors_m, without_ground_truth);
-    if (!single_frame_errors_m.empty()) {
-      const st::evaluation::ErrorStats e = st::evaluation::summarize(single_frame_errors_m);
-      json << ",\n  \"single_frame_error_m\": {\"rmse\": " << jsonNumber(e.rmse) << ", \"mean\": " << jsonNumber(e.mean)
-           << ", \"median\": " << jsonNumber(e.median) << ", \"p90\": " << jsonNumber(percentile(single_frame_errors_m, 0.9))
-           << ", \"max\": " << jsonNumber(e.max) << "}";
-    }
+    const SingleFrameErrors errors(single_frame_errors_m);
+    summary << errors.summaryLine(without_ground_truth);
+    if (errors.stats.count > 0) json << ",\n  \"single_frame_error_m\": " << errors.json();
   }
   if (!sequence.groundTruth().empty()) {
     try {
