@@ -155,12 +155,8 @@ Eigen::AlignedBox3f regionReached(const std::vector<Eigen::Vector3f>& points_C, 
                                   float margin_m) {
   Eigen::AlignedBox3f box_C;
   for (const Eigen::Vector3f& p : points_C) box_C.extend(p);
-  Eigen::AlignedBox3f box_W;
-  if (box_C.isEmpty()) return box_W;
-  const Eigen::Isometry3f T = T_W_C.cast<float>();
-  for (int corner = 0; corner < 8; ++corner) {
-    box_W.extend(T * box_C.corner(static_cast<Eigen::AlignedBox3f::CornerType>(corner)));
-  }
+  const Eigen::AlignedBox3f box_W = transformedBox(Eigen::Isometry3f(T_W_C.cast<float>()), box_C);
+  if (box_W.isEmpty()) return box_W;
   return Eigen::AlignedBox3f(box_W.min().array() - margin_m, box_W.max().array() + margin_m);
 }
 

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "sdf_tracker/core/se3.h"
 #include "sdf_tracker/core/sparse_tsdf_map.h"
 #include "sdf_tracker/core/surface.h"
 
@@ -121,13 +122,8 @@ bool MapServices::saveVolumeRegion(sdf_tracker::SaveRegion::Request& req, sdf_tr
           << max_map.transpose() << ")";
       throw std::invalid_argument(msg.str());
     }
-    // The box's corners in the tracker's world, and the box along its axes that holds them.
-    const Eigen::Isometry3d T_W_map = T_map_W_().inverse();
-    const Eigen::AlignedBox3d box_map(min_map, max_map);
-    Eigen::AlignedBox3d box_W;
-    for (int corner = 0; corner < 8; ++corner) {
-      box_W.extend(T_W_map * box_map.corner(static_cast<Eigen::AlignedBox3d::CornerType>(corner)));
-    }
+    // The box along the tracker's axes that holds the one given in the map frame.
+    const Eigen::AlignedBox3d box_W = st::transformedBox(T_map_W_().inverse(), Eigen::AlignedBox3d(min_map, max_map));
     const st::TsdfVolume region = st::toDenseVolume(*copyMap(nullptr), box_W);
     st::io::writeVti(path, region);
     const Eigen::Vector3i dims = region.dims();

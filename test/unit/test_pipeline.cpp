@@ -4,8 +4,8 @@
 #include <cmath>
 #include <iostream>
 
-#include "sdf_tracker/core/parameters.h"
 #include "sdf_tracker/core/motion_model.h"
+#include "sdf_tracker/core/parameters.h"
 #include "sdf_tracker/core/pipeline.h"
 #include "sdf_tracker/core/se3.h"
 #include "sdf_tracker/core/synthetic.h"

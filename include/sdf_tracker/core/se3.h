@@ -16,4 +16,15 @@ Twist logSe3(const Eigen::Isometry3d& T);
 /// Rotation angle [rad] of a rigid transform.
 double rotationAngle(const Eigen::Isometry3d& T);
 
+/// The axis-aligned box that holds `box` moved by T (its eight corners'); empty for an empty box.
+template <typename Scalar>
+Eigen::AlignedBox<Scalar, 3> transformedBox(const Eigen::Transform<Scalar, 3, Eigen::Isometry>& T,
+                                            const Eigen::AlignedBox<Scalar, 3>& box) {
+  using Box = Eigen::AlignedBox<Scalar, 3>;
+  Box moved;
+  if (box.isEmpty()) return moved;
+  for (int corner = 0; corner < 8; ++corner) moved.extend(T * box.corner(static_cast<typename Box::CornerType>(corner)));
+  return moved;
+}
+
 }  // namespace sdf_tracker
