@@ -13,6 +13,7 @@ add_library(sdf_tracker_core
   ${SDF_TRACKER_ROOT}/src/core/depth_undistortion.cpp
   ${SDF_TRACKER_ROOT}/src/core/depth_image.cpp
   ${SDF_TRACKER_ROOT}/src/core/evaluation.cpp
+  ${SDF_TRACKER_ROOT}/src/core/frame_memory.cpp
   ${SDF_TRACKER_ROOT}/src/core/integrator.cpp
   ${SDF_TRACKER_ROOT}/src/core/io.cpp
   ${SDF_TRACKER_ROOT}/src/core/motion_model.cpp

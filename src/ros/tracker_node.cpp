@@ -2,11 +2,13 @@
 
 #include <ros/ros.h>
 
+#include "sdf_tracker/core/frame_memory.h"
 #include "sdf_tracker/ros/tracker_server.h"
 
 int main(int argc, char** argv) {
   // Line-buffered even into a pipe (roslaunch), so the shut-down summary is not lost.
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  sdf_tracker::keepFrameMemoryResident();
   ros::init(argc, argv, "sdf_tracker_node");
   try {
     sdf_tracker_ros::TrackerServer server(ros::NodeHandle(), ros::NodeHandle("~"));

@@ -20,6 +20,7 @@
 #include "command_line.h"
 #include "output_folder.h"
 #include "report.h"
+#include "sdf_tracker/core/frame_memory.h"
 #include "sdf_tracker/core/io.h"
 #include "sdf_tracker/core/parameters.h"
 #include "sdf_tracker/core/pipeline.h"
@@ -418,4 +419,7 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) { return sdf_tracker::tools::runTool("sdf_tracker_offline", run, argc, argv); }
+int main(int argc, char** argv) {
+  sdf_tracker::keepFrameMemoryResident();
+  return sdf_tracker::tools::runTool("sdf_tracker_offline", run, argc, argv);
+}

@@ -1,9 +1,16 @@
 // The on-line loop: bad frames, live updates, tracking loss and recovery, motion prediction.
 #include <gtest/gtest.h>
 
+#if __has_include(<malloc.h>)
+#include <malloc.h>
+#endif
+
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <iostream>
 
+#include "sdf_tracker/core/frame_memory.h"
 #include "sdf_tracker/core/motion_model.h"
 #include "sdf_tracker/core/parameters.h"
 #include "sdf_tracker/core/pipeline.h"
@@ -13,6 +20,25 @@
 
 namespace sdf_tracker {
 namespace {
+
+// glibc's own malloc; AddressSanitizer's replacement ignores mallopt().
+#if defined(M_MMAP_THRESHOLD) && !defined(__SANITIZE_ADDRESS__)
+TEST(FrameMemory, AFrameSizedBufferComesFromTheHeapAndStaysAfterItIsFreed) {
+  ASSERT_TRUE(keepFrameMemoryResident()) << "glibc refused the allocator settings";
+  constexpr size_t kBytes = 4 << 20;  // a 1280x800 float depth image
+  const size_t mapped_before = mallinfo2().hblkhd;
+  char* buffer = static_cast<char*>(std::malloc(kBytes));
+  ASSERT_NE(buffer, nullptr);
+  std::memset(buffer, 1, kBytes);
+  EXPECT_EQ(mallinfo2().hblkhd, mapped_before) << "the buffer was mapped on its own, to be unmapped when freed";
+  std::free(buffer);
+  EXPECT_GE(mallinfo2().fordblks, kBytes) << "the heap gave the freed buffer back to the system";
+}
+#else
+TEST(FrameMemory, AFrameSizedBufferComesFromTheHeapAndStaysAfterItIsFreed) {
+  GTEST_SKIP() << "not glibc's malloc: keepFrameMemoryResident() has nothing to set here";
+}
+#endif
 
 TEST(Pipeline, BadFramesLeaveMapAndPoseUntouched) {
   Settings settings = preset("default");
