@@ -48,15 +48,18 @@ for sequence in "${ablation_sequences[@]}"; do
   run "ablation_negative_band_0.04__$base" "$sequence" --threads 2 --param NegativeTruncationDistance=-0.04
 done
 if [ -f "$redkitchen/depth.txt" ]; then
-  echo "threads, ray casting, grid sizes and compact voxels on redkitchen"
+  echo "threads, ray casting, dense grid sizes and compact voxels on redkitchen"
   run "threads_1" "$redkitchen" --threads 1
   run "raycast_default" "$redkitchen" --threads 2 --raycast
+  # Grid sizes and compact voxels are the dense grid's (the default map is sparse).
+  dense=(--param MapType=dense)
   for n in 128 200 256 320 400; do
-    run "grid_${n}" "$redkitchen" --threads 2 --param GridSizeX=$n --param GridSizeY=$n --param GridSizeZ=$n
+    run "grid_${n}" "$redkitchen" --threads 2 "${dense[@]}" --param GridSizeX=$n --param GridSizeY=$n --param GridSizeZ=$n
   done
-  run "reference_200_2cm" "$redkitchen" --threads 2 --param GridSizeX=200 --param GridSizeY=200 --param GridSizeZ=200
-  run "compact_256" "$redkitchen" --threads 2 --param CompactVoxels=true
-  run "compact_512_1cm" "$redkitchen" --threads 2 --param CompactVoxels=true --param CellSize=0.01 \
+  run "reference_200_2cm" "$redkitchen" --threads 2 "${dense[@]}" --param GridSizeX=200 --param GridSizeY=200 \
+    --param GridSizeZ=200
+  run "compact_256" "$redkitchen" --threads 2 "${dense[@]}" --param CompactVoxels=true
+  run "compact_512_1cm" "$redkitchen" --threads 2 "${dense[@]}" --param CompactVoxels=true --param CellSize=0.01 \
     --param GridSizeX=512 --param GridSizeY=512 --param GridSizeZ=512
 fi
 

@@ -274,7 +274,8 @@ std::vector<ParameterSpec> buildTable() {
       "MapType", ParameterType::kText, "",
       "dense: one grid of GridSizeX/Y/Z voxels (fixed extent); sparse: 8^3-voxel blocks allocated where surfaces "
       "are seen (grows with the scene)",
-      std::nullopt, {"dense", "sparse"}, nullptr, same(std::string("dense")), kAtStart, kAll,
+      std::nullopt, {"dense", "sparse"}, nullptr, {std::string("sparse"), std::string("dense"), std::string("dense")},
+      kAtStart, kAll,
       [](S& s, const ParameterValue& v) {
         s.pipeline.volume.type = std::get<std::string>(v) == "sparse" ? MapType::kSparse : MapType::kDense;
       },

@@ -51,6 +51,7 @@ TEST(Parameters, RulesBetweenParametersAreReportedInTheUsersWords) {
   EXPECT_NE(all.find("ImageWidth/ImageHeight"), std::string::npos) << all;
   EXPECT_EQ(all.find("_m "), std::string::npos) << "no struct field names: " << all;
   Settings compact = preset("default");
+  setParameter(&compact, "MapType", std::string("dense"));
   setParameter(&compact, "CompactVoxels", true);
   setParameter(&compact, "MaxWeight", 300.0);
   ASSERT_EQ(compact.validate().size(), 1u);

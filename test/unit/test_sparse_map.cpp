@@ -442,6 +442,7 @@ TEST(SparseMap, TracksTheDeskPathAsTheDenseGridDoes) {
   settings.pipeline.volume.dims = Eigen::Vector3i(160, 160, 160);
   settings.pipeline.volume.voxel_size_m = 0.04;
   settings.pipeline.initial_camera_in_grid = Eigen::Vector3d(0.5, 0.5, 0.4);
+  setParameter(&settings, "MapType", std::string("dense"));
   SdfPipeline dense(settings.pipeline);
   setParameter(&settings, "MapType", std::string("sparse"));
   SdfPipeline sparse(settings.pipeline);
@@ -597,6 +598,7 @@ TEST(SparseMap, AMemoryBudgetSwapsBlocksOutAndBackWithoutChangingTheTrajectoryOr
 
 TEST(SparseMap, AMemoryBudgetIsRefusedForTheDenseGridAndWithoutAPlaceForItsFile) {
   Settings settings = preset("default");
+  setParameter(&settings, "MapType", std::string("dense"));
   setParameter(&settings, "MaxMemoryMB", 100.0);
   const std::vector<std::string> violations = settings.validate();
   ASSERT_EQ(violations.size(), 1u);

@@ -211,7 +211,7 @@ TEST(Offline, AMemoryBoundIsReportedAndRefusedWhereItCannotHold) {
   EXPECT_NE(bounded.output.find("above MaxMemoryMB=0.5", warned_at), std::string::npos) << bounded.output;
   EXPECT_EQ(bounded.output.find(overrun, warned_at + 1), std::string::npos) << "warned more than once";
 
-  expectRefused(sequence, "--param MaxMemoryMB=64", {"MaxMemoryMB=64 applies to MapType=sparse only"});
+  expectRefused(sequence, "--param MapType=dense --param MaxMemoryMB=64", {"MaxMemoryMB=64 applies to MapType=sparse only"});
   expectRefused(sequence, "--param MapType=sparse --param MaxMemoryMB=64 --param SwapDirectory=/nonexistent/swap",
                 {"SwapDirectory", "/nonexistent/swap"});
 }
