@@ -95,12 +95,17 @@ SdfPipeline::SdfPipeline(const PipelineConfig& config)
   tracker_ = std::make_unique<Tracker>(config.tracker);
 }
 
-void SdfPipeline::reset() {
+void SdfPipeline::clearMap() {
   map_->clear();
   if (budget_) budget_->clear();
-  T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
+  told_of_swapping_ = warned_of_overrun_ = false;
   map_initialised_ = false;
   consecutive_failures_ = 0;
+}
+
+void SdfPipeline::reset() {
+  clearMap();
+  T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   motion_.clear();
 }
 
@@ -109,6 +114,7 @@ void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map) {
   map_ = std::move(map);
   config_.volume = map_->config();
   budget_ = makeBudget(config_, map_->type());
+  told_of_swapping_ = warned_of_overrun_ = false;
   T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   map_initialised_ = true;
   consecutive_failures_ = 0;
@@ -219,12 +225,8 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
   const float furthest_m = budget_ ? filtered.maxMeasurement() : 0.0f;  // only swapping needs it
 
   if (config_.reset_after_failures > 0 && consecutive_failures_ >= config_.reset_after_failures) {
-    const Eigen::Isometry3d held = T_W_C_;
-    map_->clear();
-    if (budget_) budget_->clear();
-    map_initialised_ = false;
-    consecutive_failures_ = 0;
-    T_W_C_ = T_W_C_last_fused_ = held;
+    clearMap();
+    T_W_C_last_fused_ = T_W_C_;  // the new map starts where the camera was last
     report.reset = true;
   }
 

@@ -127,6 +127,37 @@ TEST(Pipeline, ALostCameraHoldsItsPoseFusesNothingAndRelocalisesWhenItSeesTheMap
   EXPECT_LT((pipeline.pose().translation() - truth.translation()).norm(), 0.01);
 }
 
+TEST(Pipeline, AfterResetAfterFailuresFailedFramesANewMapStartsWhereTheCameraWasHeld) {
+  PipelineConfig config = smallRoomPipeline();
+  config.reset_after_failures = 5;
+  SdfPipeline pipeline(config);
+  const PinholeCamera camera = test::testCamera();
+  int i = 0;
+  for (; i < 10; ++i) {
+    const Eigen::Isometry3d pose = synthetic::cameraPose(synthetic::Motion::kDesk, i * kFramePeriod_s, kDeskDuration_s);
+    ASSERT_TRUE(pipeline.processFrame(test::renderRoom(pose, camera), camera, i * kFramePeriod_s).track.ok()) << i;
+  }
+  const Eigen::Isometry3d held = pipeline.pose();
+  const double weight_before = test::totalWeight(pipeline.map());
+  const DepthImage away = test::renderRoom(
+      test::perturbed(synthetic::cameraPose(synthetic::Motion::kDesk, i * kFramePeriod_s, kDeskDuration_s), 0.5,
+                      70.0 * M_PI / 180.0),
+      camera);
+  for (int k = 0; k < 5; ++k, ++i) {
+    const FrameReport report = pipeline.processFrame(away, camera, i * kFramePeriod_s);
+    ASSERT_FALSE(report.track.ok()) << "frame " << i;
+    EXPECT_FALSE(report.reset) << "frame " << i << ": reset before ResetAfterFailures failures";
+  }
+  const FrameReport restart = pipeline.processFrame(away, camera, i++ * kFramePeriod_s);
+  EXPECT_TRUE(restart.reset);
+  EXPECT_TRUE(restart.initialised_map && restart.fused) << "the frame starts the new map";
+  EXPECT_TRUE(pipeline.pose().isApprox(held, 1e-9)) << "the new map starts at the held pose";
+  const double weight_after = test::totalWeight(pipeline.map());
+  EXPECT_GT(weight_after, 0.0);
+  EXPECT_LT(weight_after, weight_before) << "the old map was cleared";
+  EXPECT_TRUE(pipeline.processFrame(away, camera, i * kFramePeriod_s).track.ok()) << "tracked in the new map";
+}
+
 TEST(MotionModel, LogInvertsExpAndAConstantTwistIsExtrapolatedExactly) {
   Twist xi;
   xi << 0.3, -0.2, 0.5, 0.1, -0.4, 0.25;

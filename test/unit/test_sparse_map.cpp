@@ -594,6 +594,14 @@ TEST(SparseMap, AMemoryBudgetSwapsBlocksOutAndBackWithoutChangingTheTrajectoryOr
     ASSERT_EQ(std::memcmp(a.find(index)->voxels.data(), b.find(index)->voxels.data(), sizeof(VoxelBlock::voxels)), 0)
         << "block " << index.transpose();
   }
+
+  // After a reset the map starts anew, and so does its swapping: the user is told again.
+  bounded.reset();
+  bool told_again = false;
+  for (size_t f = 0; f < frames.size() && !told_again; ++f) {
+    told_again = !bounded.processFrame(frames[f], camera, 100.0 + 2.0 * f / 30.0).swap_notice.empty();
+  }
+  EXPECT_TRUE(told_again) << "no notice that the new map swaps";
 }
 
 TEST(SparseMap, AMemoryBudgetIsRefusedForTheDenseGridAndWithoutAPlaceForItsFile) {
