@@ -4,8 +4,8 @@
 # loop and planar sequences generated here), all frames, 640x480, 2 threads:
 #   - the default preset against the paper's and the reference's;
 #   - an ablation: the default preset with one improvement switched off in turn;
-#   - a sweep of CellSize (0.01 .. 0.03 m, grid keeping a ~5 m cube) and truncation (3 and 5 cells):
-#     the default preset should lose no frame anywhere in it;
+#   - a sweep of CellSize (0.01 .. 0.03 m) and truncation (3 and 5 cells in front of a surface, 0.6
+#     of that behind, as in the default band): the default preset should lose no frame anywhere in it;
 #   - on fr1_xyz: the error against time and against a shift of the estimate's clock.
 # Writes bench/results/<date>_accuracy.md with plots beside it.
 #   bash bench/accuracy.sh [SEQUENCE_DIR ...]     (about 40 minutes on 2 cores)
@@ -43,12 +43,12 @@ for sequence in "${sequences[@]}"; do
   run "with_symmetric_band" "$sequence" --param NegativeTruncationDistance=-0.1
   echo "CellSize x truncation"
   for cell in 0.01 0.015 0.02 0.03; do
-    cells=$(awk -v c="$cell" 'BEGIN { printf "%d", 5.12 / c + 0.5 }')
     for k in 3 5; do
-      band=$(awk -v c="$cell" -v k="$k" 'BEGIN { printf "%.3f", c * k }')
-      run "sweep_cell${cell}_band${k}" "$sequence" --param CellSize="$cell" --param GridSizeX="$cells" \
-        --param GridSizeY="$cells" --param GridSizeZ="$cells" --param PositiveTruncationDistance="$band" \
-        --param NegativeTruncationDistance="-$band"
+      # k cells in front of the surface and 0.6 k behind: the default band's shape (0.1 m, -0.06 m).
+      front=$(awk -v c="$cell" -v k="$k" 'BEGIN { printf "%.4f", c * k }')
+      behind=$(awk -v c="$cell" -v k="$k" 'BEGIN { printf "%.4f", 0.6 * c * k }')
+      run "sweep_cell${cell}_band${k}" "$sequence" --param CellSize="$cell" \
+        --param PositiveTruncationDistance="$front" --param NegativeTruncationDistance="-$behind"
     done
   done
 done

@@ -87,7 +87,7 @@ def main(work, results):
     sweep = sorted({v for v, _ in runs if v.startswith("sweep_")},
                    key=lambda v: (float(v.split("_")[1][4:]), v))
     if sweep:
-        lines += ["## CellSize and truncation (band = k cells each side; grid keeps a ~5.1 m cube)", "",
+        lines += ["## CellSize and truncation (band = k cells in front of the surface, 0.6 k behind)", "",
                   "| CellSize, band | " + " | ".join(sequences) + " |", "|---" * (len(sequences) + 1) + "|"]
         best = {s: min((ate(runs.get((v, s))) for v in sweep if ate(runs.get((v, s))) is not None), default=None)
                 for s in sequences}
