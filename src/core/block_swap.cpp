@@ -161,15 +161,20 @@ void MapMemoryBudget::listSwapped(const SparseTsdfMap::BlockIndex& block) {
   swapped_by_chunk_[SparseTsdfMap::keyOf(SparseTsdfMap::chunkOf(block))].push_back(block);
 }
 
-std::string MapMemoryBudget::startNotice() const {
+std::string MapMemoryBudget::takeStartNotice() {
+  if (told_of_start_ || swap_.size() == 0) return "";
+  told_of_start_ = true;
   std::ostringstream notice;
   notice << "the map reached MaxMemoryMB=" << max_bytes_ / 1048576.0 << ": blocks away from the camera go to a swap file in "
          << swap_.directory() << " and come back when seen again";
   return notice.str();
 }
 
-std::string MapMemoryBudget::overrunWarning(const SparseTsdfMap& map) const {
-  if (map.memoryBytes() <= max_bytes_) return "";
+std::string MapMemoryBudget::takeOverrunWarning(const SparseTsdfMap& map) {
+  const bool over = map.memoryBytes() > max_bytes_;
+  const bool news = over && !was_over_;
+  was_over_ = over;
+  if (!news) return "";
   std::ostringstream warning;
   warning << std::fixed << std::setprecision(1) << "the map holds " << map.memoryBytes() / 1048576.0
           << " MiB, above MaxMemoryMB=" << max_bytes_ / 1048576.0

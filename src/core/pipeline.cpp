@@ -98,7 +98,6 @@ SdfPipeline::SdfPipeline(const PipelineConfig& config)
 void SdfPipeline::clearMap() {
   map_->clear();
   if (budget_) budget_->clear();
-  told_of_swapping_ = warned_of_overrun_ = false;
   map_initialised_ = false;
   consecutive_failures_ = 0;
 }
@@ -114,7 +113,6 @@ void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map) {
   map_ = std::move(map);
   config_.volume = map_->config();
   budget_ = makeBudget(config_, map_->type());
-  told_of_swapping_ = warned_of_overrun_ = false;
   T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   map_initialised_ = true;
   consecutive_failures_ = 0;
@@ -177,13 +175,8 @@ void SdfPipeline::evictAwayFrom(const Eigen::Isometry3d& T_W_C, const PinholeCam
   if (keep.empty()) return;  // the view left the map's reach: nothing to go by
   try {
     report->blocks_swapped_out += budget_->evict(&sparse, keep, T_W_C.translation().cast<float>());
-    if (report->blocks_swapped_out > 0 && !told_of_swapping_) {
-      told_of_swapping_ = true;
-      report->swap_notice = budget_->startNotice();
-    }
-    const std::string overrun = budget_->overrunWarning(sparse);
-    if (!overrun.empty() && !warned_of_overrun_) report->swap_warning = overrun;
-    warned_of_overrun_ = !overrun.empty();
+    report->swap_notice = budget_->takeStartNotice();
+    report->swap_warning = budget_->takeOverrunWarning(sparse);
   } catch (const std::runtime_error& e) {
     report->swap_error = e.what();
   }

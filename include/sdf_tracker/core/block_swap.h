@@ -71,17 +71,21 @@ class MapMemoryBudget {
   /// budget (or only blocks in `keep` are left). Returns how many. A block that cannot be written
   /// stays in the map, and the error (std::runtime_error) is passed on.
   size_t evict(SparseTsdfMap* map, const BlockBox& keep, const Eigen::Vector3f& centre_W);
-  /// What to tell the user when swapping starts.
-  std::string startNotice() const;
-  /// Empty while the map holds at most the budget; else why not, for the user: eviction spares
-  /// the blocks around the camera's view, and those alone can need more.
-  std::string overrunWarning(const SparseTsdfMap& map) const;
+  /// After evict(): what to tell the user, once, when the first blocks have gone to the swap file
+  /// (since the budget was made or cleared); empty otherwise.
+  std::string takeStartNotice();
+  /// After evict() on `map`: why the map is above the budget (eviction spares the blocks around
+  /// the camera's view, and those alone can need more), once each time it goes over; empty while
+  /// it stays over and while it holds at most the budget.
+  std::string takeOverrunWarning(const SparseTsdfMap& map);
   /// The map with every swapped block put back: what a save or a whole mesh must read.
   SparseTsdfMap whole(const SparseTsdfMap& map) const;
-  /// Forgets every swapped block (the map was cleared or replaced).
+  /// Forgets every swapped block (the map was cleared or replaced); the user is told again when
+  /// the next map swaps or goes over.
   void clear() {
     swap_.clear();
     swapped_by_chunk_.clear();
+    told_of_start_ = was_over_ = false;
   }
 
   /// Eviction stops at this fraction of the budget, so it runs now and then, not every frame.
@@ -95,6 +99,8 @@ class MapMemoryBudget {
   size_t max_bytes_;
   BlockSwapFile swap_;
   std::unordered_map<uint64_t, std::vector<SparseTsdfMap::BlockIndex>> swapped_by_chunk_;
+  bool told_of_start_ = false;  ///< takeStartNotice() has given its notice
+  bool was_over_ = false;       ///< the map was above the budget at the last takeOverrunWarning()
 };
 
 }  // namespace sdf_tracker

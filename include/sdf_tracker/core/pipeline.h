@@ -150,8 +150,8 @@ class SdfPipeline {
   /// With a memory budget and the map over it: swaps out blocks away from that view.
   void evictAwayFrom(const Eigen::Isometry3d& T_W_C, const PinholeCamera& camera, float furthest_m,
                      FrameReport* report);
-  /// Empties the map and its swap file; the next frame starts a new map, whose swapping the
-  /// user is told of again. The pose is left to the caller.
+  /// Empties the map and its swap file; the next frame starts a new map. The pose is left to the
+  /// caller.
   void clearMap();
 
   PipelineConfig config_;
@@ -162,9 +162,6 @@ class SdfPipeline {
   std::optional<DepthUndistortion> undistortion_;
   /// Present with a sparse map and max_map_memory_mb > 0.
   std::unique_ptr<MapMemoryBudget> budget_;
-  /// Whether the current map's swapping start and its latest overrun were reported.
-  bool told_of_swapping_ = false;
-  bool warned_of_overrun_ = false;
   Eigen::Isometry3d T_W_C_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   bool map_initialised_ = false;
