@@ -391,6 +391,23 @@ std::vector<std::string> Settings::validate() const {
   return v.list();
 }
 
+std::vector<std::string> Settings::withoutEffect(const std::vector<std::string>& given) const {
+  std::vector<std::string> notes;
+  if (pipeline.volume.type == MapType::kSparse) {
+    std::string grid;
+    int count = 0;
+    for (const char* name : {"GridSizeX", "GridSizeY", "GridSizeZ"}) {
+      if (std::find(given.begin(), given.end(), name) == given.end()) continue;
+      grid += (count++ ? ", " : "") + std::string(name) + "=" + toText(findParameter(name)->get(*this));
+    }
+    if (count > 0) {
+      notes.push_back(grid + (count > 1 ? " have" : " has") + " no effect with MapType=sparse, whose blocks grow "
+                      "with the scene; set MapType=dense for one grid of that size");
+    }
+  }
+  return notes;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Schedules and presets
 

@@ -93,7 +93,7 @@ const std::map<std::string, OptionSetter>& nodeOptionTable() {
 }  // namespace
 
 void readParameters(const ros::NodeHandle& pnh, st::Settings* settings, NodeOptions* options,
-                    std::vector<std::string>* unknown) {
+                    std::vector<std::string>* warnings) {
   // Every private parameter, typed as the server holds it.
   std::map<std::string, st::ParameterValue> given;
   std::vector<std::string> all;
@@ -139,7 +139,7 @@ void readParameters(const ros::NodeHandle& pnh, st::Settings* settings, NodeOpti
       } else if (const auto option = nodeOptionTable().find(name); option != nodeOptionTable().end()) {
         option->second(*options, value);
       } else {
-        unknown->push_back(name);
+        warnings->push_back("ignoring unknown parameter ~" + name);
       }
     } catch (const std::invalid_argument& e) {
       errors.require(false, std::string("~") + e.what());
@@ -147,6 +147,9 @@ void readParameters(const ros::NodeHandle& pnh, st::Settings* settings, NodeOpti
   }
   if (errors.list().empty()) errors.merge("", settings->validate());
   st::throwIfInvalid("parameters of " + pnh.getNamespace(), errors.list());
+  std::vector<std::string> names;
+  for (const auto& entry : given) names.push_back(entry.first);
+  for (const std::string& note : settings->withoutEffect(names)) warnings->push_back("~" + note);
 }
 
 std::vector<std::pair<std::string, st::ParameterValue>> reconfigureValues(const sdf_tracker::SdfTrackerConfig& config) {

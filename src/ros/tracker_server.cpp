@@ -35,10 +35,10 @@ std::string statusText(const st::TrackResult& result) {
 }  // namespace
 
 TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(pnh), it_(nh) {
-  std::vector<std::string> unknown;
+  std::vector<std::string> warnings;
   st::Settings settings;
-  readParameters(pnh_, &settings, &options_, &unknown);
-  for (const auto& name : unknown) ROS_WARN("sdf_tracker: ignoring unknown parameter ~%s", name.c_str());
+  readParameters(pnh_, &settings, &options_, &warnings);
+  for (const auto& warning : warnings) ROS_WARN("sdf_tracker: %s", warning.c_str());
   camera_settings_ = settings.camera;
   state_.pipeline = std::make_unique<st::SdfPipeline>(settings.pipeline);
   if (options_.load_volume != "none" && !options_.load_volume.empty()) {

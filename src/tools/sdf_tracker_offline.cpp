@@ -184,10 +184,12 @@ int run(int argc, char** argv) {
     return 0;
   }
   st::Settings settings = st::preset(args.get("preset", "default"));
+  std::vector<std::string> given;
   for (const std::string& assignment : args.getAll("param")) {
     const size_t eq = assignment.find('=');
     if (eq == std::string::npos) throw std::invalid_argument("--param expects NAME=VALUE, got \"" + assignment + "\"");
     const std::string name = assignment.substr(0, eq);
+    given.push_back(name);
     const st::ParameterSpec* spec = st::findParameter(name);
     if (spec && spec->readers == st::Readers::kNodeOnly) {
       throw std::invalid_argument("--param " + name + ": read by the ROS node only; the offline runner takes the "
@@ -208,6 +210,7 @@ int run(int argc, char** argv) {
     return 0;
   }
   st::throwIfInvalid("parameters", settings.validate());
+  for (const std::string& note : settings.withoutEffect(given)) std::cerr << "warning: --param " << note << "\n";
 #ifdef _OPENMP
   if (args.has("threads")) {
     // More threads than a few per core only cost memory and time (and thousands fail to start).

@@ -58,6 +58,22 @@ TEST(Parameters, RulesBetweenParametersAreReportedInTheUsersWords) {
   EXPECT_EQ(compact.validate()[0], "MaxWeight must be at most 255.99609375 with CompactVoxels=true (got 300)");
 }
 
+TEST(Parameters, AGridSizeGivenForTheSparseMapIsAcceptedAndTheUserToldItHasNoEffect) {
+  Settings sparse = preset("default");
+  setParameter(&sparse, "GridSizeX", 200);
+  setParameter(&sparse, "GridSizeZ", 120);
+  EXPECT_TRUE(sparse.validate().empty());
+  const std::vector<std::string> notes = sparse.withoutEffect({"CellSize", "GridSizeX", "GridSizeZ"});
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_EQ(notes[0].rfind("GridSizeX=200, GridSizeZ=120 have no effect with MapType=sparse", 0), 0u) << notes[0];
+  EXPECT_NE(notes[0].find("set MapType=dense"), std::string::npos) << notes[0];
+  EXPECT_TRUE(sparse.withoutEffect({"CellSize", "MaxMemoryMB"}).empty()) << "only what the user gave is named";
+
+  Settings dense = sparse;
+  setParameter(&dense, "MapType", std::string("dense"));
+  EXPECT_TRUE(dense.withoutEffect({"GridSizeX", "GridSizeZ"}).empty()) << "the dense grid reads them";
+}
+
 TEST(Parameters, TypesAreCheckedAndIntegersConvertOnlyWhenExact) {
   Settings settings;
   EXPECT_EQ(errorOf([&] { setParameterFromText(&settings, "CellSize", "abc"); }),

@@ -30,6 +30,11 @@ struct Settings {
   /// Every violation, in the user's words: parameter names as typed ("CellSize must be in
   /// (0, 1] m (got -0.1)"), ranges of every table row and the rules that tie parameters together.
   std::vector<std::string> validate() const;
+  /// The parameters in `given` (names as the user typed them) that these settings leave without
+  /// effect, one sentence each: GridSizeX/Y/Z when MapType is sparse. They are accepted, since
+  /// the reference release's launch files set them, but the user must be told. Empty when every
+  /// given parameter takes effect.
+  std::vector<std::string> withoutEffect(const std::vector<std::string>& given) const;
 };
 
 /// A parameter's value as it travels between the command line, the ROS parameter server,

@@ -50,9 +50,10 @@ std::string stripSlash(const std::string& frame_id);
 
 /// Reads every private parameter of `pnh` once. Throws std::invalid_argument listing every
 /// invalid, mistyped or out-of-range value by its parameter name ("~CellSize must be in ...");
-/// nothing is clamped or replaced by a default. `unknown` receives names nobody reads.
+/// nothing is clamped or replaced by a default. `warnings` receives, for the log, the names nobody
+/// reads and the parameters the others leave without effect (Settings::withoutEffect).
 void readParameters(const ros::NodeHandle& pnh, sdf_tracker::Settings* settings, NodeOptions* options,
-                    std::vector<std::string>* unknown);
+                    std::vector<std::string>* warnings);
 
 /// dynamic_reconfigure <-> the parameter table, typed (no rounding through text).
 std::vector<std::pair<std::string, sdf_tracker::ParameterValue>> reconfigureValues(
