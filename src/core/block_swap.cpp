@@ -117,6 +117,8 @@ size_t MapMemoryBudget::restore(SparseTsdfMap* map, const BlockBox& box) {
     }
     if (blocks.empty()) swapped_by_chunk_.erase(listed);
   });
+  // Stamped as changed now: a reader's copy dropped them when they left (removedAt()).
+  const uint64_t revision = wanted.empty() ? 0 : map->beginRevision();
   VoxelBlock block;
   for (size_t n = 0; n < wanted.size(); ++n) {
     const uint64_t key = SparseTsdfMap::keyOf(wanted[n]);
@@ -127,6 +129,7 @@ size_t MapMemoryBudget::restore(SparseTsdfMap* map, const BlockBox& box) {
       for (size_t m = n; m < wanted.size(); ++m) listSwapped(wanted[m]);
       throw;
     }
+    block.changed_at = revision;
     map->allocate(wanted[n]) = block;
     swap_.erase(key);
   }

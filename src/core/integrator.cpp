@@ -260,7 +260,7 @@ size_t integrateSparse(const VoxelFusion& fusion, const DepthImage& depth, const
   }
   // Blocks the band's rays grazed but no voxel of which the frame saw hold nothing: drop them.
   for (const auto& index : added) {
-    if (map->find(index)->changed_at != revision) map->remove(index);
+    if (map->find(index)->changed_at != revision) map->discardUnobserved(index);
   }
   return updated;
 }

@@ -26,6 +26,10 @@ VoxelBlock& SparseTsdfMap::allocate(const BlockIndex& block) {
 }
 
 void SparseTsdfMap::remove(const BlockIndex& block) {
+  if (inKeyRange(block) && blocks_.erase(keyOf(block))) removed_at_ = ++revision_;
+}
+
+void SparseTsdfMap::discardUnobserved(const BlockIndex& block) {
   if (inKeyRange(block)) blocks_.erase(keyOf(block));
 }
 

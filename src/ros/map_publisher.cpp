@@ -41,7 +41,7 @@ bool MapSnapshot::copyAllIfStale(const st::TsdfMap& live) {
 }
 
 const st::TsdfMap* MapSnapshot::update(int slabs_per_lock, int blocks_per_lock) {
-  std::vector<st::SparseTsdfMap::BlockIndex> changed;
+  std::vector<st::SparseTsdfMap::BlockIndex> changed, removed;
   {
     std::lock_guard<std::mutex> lock(map_mutex_);
     const st::TsdfMap* live = live_();
@@ -50,17 +50,27 @@ const st::TsdfMap* MapSnapshot::update(int slabs_per_lock, int blocks_per_lock) 
     if (live->type() == st::MapType::kSparse) {
       const auto& sparse = static_cast<const st::SparseTsdfMap&>(*live);
       changed = sparse.changedSince(synced_revision_);
+      if (sparse.removedAt() > synced_revision_) {
+        // Blocks left the live map (swapped out under MaxMemoryMB): the copy lets them go too,
+        // so that it is bounded as the live map is.
+        static_cast<const st::SparseTsdfMap&>(*copy_).forEachBlock(
+            [&](const st::SparseTsdfMap::BlockIndex& index, const st::VoxelBlock&) {
+              if (!sparse.find(index)) removed.push_back(index);
+            });
+      }
       synced_revision_ = sparse.revision();
     }
   }
   if (copy_->type() == st::MapType::kSparse) {
+    auto& copy = static_cast<st::SparseTsdfMap&>(*copy_);
+    for (const auto& index : removed) copy.remove(index);
     for (size_t first = 0; first < changed.size(); first += blocks_per_lock) {
       const std::vector<st::SparseTsdfMap::BlockIndex> piece(
           changed.begin() + first, changed.begin() + std::min(changed.size(), first + blocks_per_lock));
       std::lock_guard<std::mutex> lock(map_mutex_);
       const st::TsdfMap* live = live_();
       if (!live || copyAllIfStale(*live)) return copy_.get();
-      static_cast<st::SparseTsdfMap&>(*copy_).copyBlocksFrom(static_cast<const st::SparseTsdfMap&>(*live), piece);
+      copy.copyBlocksFrom(static_cast<const st::SparseTsdfMap&>(*live), piece);
     }
     return copy_.get();
   }

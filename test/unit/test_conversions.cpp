@@ -12,6 +12,7 @@
 #include <sensor_msgs/image_encodings.h>
 
 #include "sdf_tracker/SdfTrackerConfig.h"
+#include "sdf_tracker/core/block_swap.h"
 #include "sdf_tracker/core/parameters.h"
 #include "sdf_tracker/core/sparse_tsdf_map.h"
 #include "sdf_tracker/ros/conversions.h"
@@ -226,6 +227,38 @@ TEST(MapSnapshot, FollowsChangedBlocksAndNoticesAMapReplacedByAnotherOfTheSameGr
   loaded->allocate(b).changed_at = loaded->beginRevision();
   live = std::move(loaded);
   EXPECT_EQ(blocksOf(snapshot.update()), std::vector<sdf_tracker::SparseTsdfMap::BlockIndex>{b});
+}
+
+TEST(MapSnapshot, LetsGoOfTheBlocksTheLiveMapSwappedOutAndTakesThemBackWhenReadBack) {
+  using BlockIndex = sdf_tracker::SparseTsdfMap::BlockIndex;
+  sdf_tracker::VolumeConfig config;
+  config.type = sdf_tracker::MapType::kSparse;
+  std::mutex mutex;
+  sdf_tracker::SparseTsdfMap live(config);
+  MapSnapshot snapshot(mutex, [&live] { return &live; });
+  const BlockIndex near(0, 0, 0), far(40, 0, 0);
+  const uint64_t fused = live.beginRevision();
+  for (const BlockIndex& index : {near, far}) {
+    sdf_tracker::VoxelBlock& block = live.allocate(index);
+    block.voxels[7] = sdf_tracker::Voxel{0.01f, 3.0f};
+    block.changed_at = fused;
+  }
+  auto blocksOf = [](const sdf_tracker::TsdfMap* map) {
+    return static_cast<const sdf_tracker::SparseTsdfMap&>(*map).blockIndices();
+  };
+  ASSERT_EQ(blocksOf(snapshot.update()), (std::vector<BlockIndex>{near, far}));
+
+  // A budget of one byte swaps out every block but those around the camera.
+  sdf_tracker::MapMemoryBudget budget(1, ::testing::TempDir());
+  ASSERT_EQ(budget.evict(&live, sdf_tracker::BlockBox{near, near}, Eigen::Vector3f::Zero()), 1u);
+  EXPECT_EQ(blocksOf(snapshot.update()), std::vector<BlockIndex>{near}) << "the copy is bounded as the live map is";
+
+  ASSERT_EQ(budget.restore(&live, sdf_tracker::BlockBox{far, far}), 1u);
+  const auto* copy = static_cast<const sdf_tracker::SparseTsdfMap*>(snapshot.update());
+  EXPECT_EQ(blocksOf(copy), (std::vector<BlockIndex>{near, far}));
+  const sdf_tracker::Voxel back = copy->find(far)->voxels[7];
+  EXPECT_EQ(back.distance_m, 0.01f);
+  EXPECT_EQ(back.weight, 3.0f);
 }
 
 }  // namespace

@@ -64,7 +64,8 @@ class MapMemoryBudget {
   size_t maxBytes() const { return max_bytes_; }
   const BlockSwapFile& swap() const { return swap_; }
 
-  /// Reads back into the map every swapped block in `box`; returns how many.
+  /// Reads back into the map every swapped block in `box`, stamped as changed at a new revision
+  /// (SparseTsdfMap::changedSince), so that a reader's copy takes it again; returns how many.
   size_t restore(SparseTsdfMap* map, const BlockBox& box);
   /// When the map holds more than the budget: writes its blocks outside `keep`, farthest from
   /// `centre_W` first, to the swap file and drops them, until it holds at most kLowWater of the

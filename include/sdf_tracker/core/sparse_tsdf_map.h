@@ -139,8 +139,12 @@ class SparseTsdfMap : public TsdfMap {
   VoxelBlock* find(const BlockIndex& block) { return inKeyRange(block) ? blocks_.find(keyOf(block)) : nullptr; }
   /// The block, added with every voxel unobserved if it did not exist.
   VoxelBlock& allocate(const BlockIndex& block);
-  /// Drops the block (its voxels become unobserved); nothing when it does not exist.
+  /// Drops the block (its voxels become unobserved); nothing when it does not exist. A reader's
+  /// copy learns of it through removedAt().
   void remove(const BlockIndex& block);
+  /// Drops a block added for the change under way that the change left unobserved: no reader
+  /// can hold it, so unlike remove() it is not a change for readers.
+  void discardUnobserved(const BlockIndex& block);
   size_t blockCount() const { return blocks_.size(); }
   /// Calls fn(index, block) for every block, in no particular order.
   template <typename Fn>
@@ -185,12 +189,17 @@ class SparseTsdfMap : public TsdfMap {
   /// would be too large (VolumeConfig::validate).
   TsdfVolume toDense(const Eigen::Vector3i& first, const Eigen::Vector3i& dims) const;
 
-  /// Counts changes: each fusion raises it once and stamps the blocks it changed with it, so a
-  /// reader can tell which blocks changed since it last looked.
+  /// Counts changes: each fusion (and each read-back of swapped blocks) raises it once and stamps
+  /// the blocks it changed with it, so a reader can tell which blocks changed since it last
+  /// looked.
   uint64_t revision() const { return revision_; }
   uint64_t beginRevision() { return ++revision_; }
   /// The revision of the last clear(): a copy synchronised before it must start afresh.
   uint64_t clearedAt() const { return cleared_at_; }
+  /// The revision of the last remove() (e.g. a block swapped out by MapMemoryBudget): a copy
+  /// synchronised before it may hold blocks this map no longer holds, which changedSince() does
+  /// not list.
+  uint64_t removedAt() const { return removed_at_; }
   /// Blocks that changed after `revision` in a fixed (sorted) order.
   std::vector<BlockIndex> changedSince(uint64_t revision) const;
   /// Makes these blocks equal to `source`'s, removing those `source` no longer holds: lets a
@@ -221,6 +230,7 @@ class SparseTsdfMap : public TsdfMap {
   BlockTable<VoxelBlock> blocks_;
   uint64_t revision_ = 0;
   uint64_t cleared_at_ = 0;
+  uint64_t removed_at_ = 0;
 };
 
 /// The map as a dense grid: a copy of a dense one; the box around every block of a sparse one.

@@ -25,8 +25,9 @@ class MapSnapshot {
 
   /// Brings the copy up to date in pieces, each under the lock: a dense grid in groups of
   /// `slabs_per_lock` z-slices, a sparse map in groups of `blocks_per_lock` of the blocks changed
-  /// since the last update. Pieces may come from consecutive frames (as a screen refresh would);
-  /// each voxel is consistent. Returns the copy, or nullptr when there is no map.
+  /// since the last update; blocks the live map dropped (MaxMemoryMB) leave the copy, which so
+  /// stays as small as the live map. Pieces may come from consecutive frames (as a screen refresh
+  /// would); each voxel is consistent. Returns the copy, or nullptr when there is no map.
   const sdf_tracker::TsdfMap* update(int slabs_per_lock = 8, int blocks_per_lock = 256);
   /// Sparse: the copy holds every change of the live map up to this revision of it.
   uint64_t syncedRevision() const { return synced_revision_; }
