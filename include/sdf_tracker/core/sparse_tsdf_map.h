@@ -50,7 +50,8 @@ struct BlockBox {
 /// voxels along x is one line and a trilinear sample inside the block reads at most four.
 struct alignas(64) VoxelBlock {
   std::array<Voxel, kBlockVoxels> voxels;
-  /// The map's revision when a voxel of this block last changed (see SparseTsdfMap::revision()).
+  /// The map's revision when a voxel of this block last changed, or when the block came back
+  /// into the map from a swap file (see SparseTsdfMap::revision()).
   uint64_t changed_at = 0;
 
   static int index(int x, int y, int z) { return (z * kBlockSide + y) * kBlockSide + x; }
