@@ -174,6 +174,8 @@ constexpr Readers kAll = Readers::kAll;
 constexpr Readers kNodeOnly = Readers::kNodeOnly;
 constexpr bool kLive = true;
 constexpr bool kAtStart = false;
+/// The dense grid's extent along x, y and z: read by MapType=dense only.
+constexpr const char* kGridSizeParameters[] = {"GridSizeX", "GridSizeY", "GridSizeZ"};
 
 Range closed(double low, double high) { return {low, high, false, false}; }
 Range leftOpen(double low, double high) { return {low, high, true, false}; }
@@ -202,10 +204,9 @@ std::vector<ParameterSpec> buildTable() {
   // The reference release's parameters, with their reference meaning.
   t.push_back(bound<double>("CellSize", "m", "voxel edge length", closed(0.001, 1.0), {0.02, 0.03, 0.02}, kAtStart,
                             kAll, [](auto& s) -> auto& { return s.pipeline.volume.voxel_size_m; }));
-  const char* axes[] = {"X", "Y", "Z"};
   for (int axis = 0; axis < 3; ++axis) {
-    t.push_back(bound<int>(std::string("GridSize") + axes[axis], "voxels",
-                           std::string("voxels along ") + char('x' + axis), closed(8, 2048), {256, 200, 200}, kAtStart,
+    t.push_back(bound<int>(kGridSizeParameters[axis], "voxels",
+                           std::string("dense grid: voxels along ") + char('x' + axis), closed(8, 2048), {256, 200, 200}, kAtStart,
                            kAll, [axis](auto& s) -> auto& { return s.pipeline.volume.dims[axis]; }));
   }
   t.push_back(bound<double>("PositiveTruncationDistance", "m", "Dmax: distances are clamped to at most this",
@@ -310,6 +311,7 @@ std::vector<ParameterSpec> buildTable() {
   t.push_back(bound<int>("ResetAfterFailures", "frames", "clear the map after this many failed frames in a row; 0 never",
                          closed(0, 1e6), same(0), kLive, kAll,
                          [](auto& s) -> auto& { return s.pipeline.reset_after_failures; }));
+  const char* axes[] = {"X", "Y", "Z"};
   for (int axis = 0; axis < 3; ++axis) {
     t.push_back(bound<double>(std::string("InitialCamera") + axes[axis], "",
                               std::string("first camera's place in the grid along ") + char('x' + axis) +
@@ -396,7 +398,7 @@ std::vector<std::string> Settings::withoutEffect(const std::vector<std::string>&
   if (pipeline.volume.type == MapType::kSparse) {
     std::string grid;
     int count = 0;
-    for (const char* name : {"GridSizeX", "GridSizeY", "GridSizeZ"}) {
+    for (const char* name : kGridSizeParameters) {
       if (std::find(given.begin(), given.end(), name) == given.end()) continue;
       grid += (count++ ? ", " : "") + std::string(name) + "=" + toText(findParameter(name)->get(*this));
     }

@@ -192,7 +192,7 @@ class SparseTsdfMap : public TsdfMap {
 
   /// Counts changes: each fusion (and each read-back of swapped blocks) raises it once and stamps
   /// the blocks it changed with it, so a reader can tell which blocks changed since it last
-  /// looked.
+  /// looked; each remove() raises it too (removedAt()).
   uint64_t revision() const { return revision_; }
   uint64_t beginRevision() { return ++revision_; }
   /// The revision of the last clear(): a copy synchronised before it must start afresh.
