@@ -12,7 +12,9 @@ namespace sdf_tracker {
 ///
 /// Measured and not adopted (bench/results/2026-11-23_walk_drift.md): a velocity averaged over
 /// more frames, meant to keep one poorly constrained frame from setting it; on the house walk it
-/// made the drift worse.
+/// made the drift worse. A Gaussian prior toward the prediction whose strength follows the measured
+/// innovation (bench/results/2026-11-23_motion_prior.md): it trades the walk's sliding for rotation
+/// and costs real data.
 class MotionModel {
  public:
   /// No prediction across more than max_gap_s.
