@@ -206,8 +206,9 @@ std::vector<ParameterSpec> buildTable() {
                             kAll, [](auto& s) -> auto& { return s.pipeline.volume.voxel_size_m; }));
   for (int axis = 0; axis < 3; ++axis) {
     t.push_back(bound<int>(kGridSizeParameters[axis], "voxels",
-                           std::string("dense grid: voxels along ") + char('x' + axis), closed(8, 2048), {256, 200, 200}, kAtStart,
-                           kAll, [axis](auto& s) -> auto& { return s.pipeline.volume.dims[axis]; }));
+                           std::string("dense grid: voxels along ") + char('x' + axis), closed(8, 2048),
+                           {256, 200, 200}, kAtStart, kAll,
+                           [axis](auto& s) -> auto& { return s.pipeline.volume.dims[axis]; }));
   }
   t.push_back(bound<double>("PositiveTruncationDistance", "m", "Dmax: distances are clamped to at most this",
                             leftOpen(0.0, 10.0), {0.1, 0.1, 0.08}, kAtStart, kAll,

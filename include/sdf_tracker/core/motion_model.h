@@ -13,8 +13,8 @@ namespace sdf_tracker {
 /// Measured and not adopted (bench/results/2026-11-23_walk_drift.md): a velocity averaged over
 /// more frames, meant to keep one poorly constrained frame from setting it; on the house walk it
 /// made the drift worse. A Gaussian prior toward the prediction whose strength follows the measured
-/// innovation (bench/results/2026-11-23_motion_prior.md): it trades the walk's sliding for rotation
-/// and costs real data.
+/// innovation (bench/results/2026-11-23_motion_prior.md): it lowers the walk's translational drift
+/// per second but not its ATE, and costs real data once strong.
 class MotionModel {
  public:
   /// No prediction across more than max_gap_s.
