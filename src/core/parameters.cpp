@@ -300,6 +300,11 @@ std::vector<ParameterSpec> buildTable() {
   t.push_back(bound<double>("MinInverseCondition", "", "below this the geometry is degenerate", closed(0.0, 1.0),
                             {1e-3, 1e-4, 1e-4}, kLive, kAll,
                             [](auto& s) -> auto& { return s.pipeline.tracker.min_inverse_condition; }));
+  t.push_back(bound<double>("MinOverlap", "",
+                            "fewer of the image's points than this fraction near mapped surfaces at the estimate: "
+                            "low_overlap, not fused; 0 off",
+                            closed(0.0, 1.0), {0.5, 0.0, 0.0}, kLive, kAll,
+                            [](auto& s) -> auto& { return s.pipeline.tracker.min_overlap; }));
   t.push_back(bound<bool>("SolveConstrainedDirections", "",
                           "degenerate geometry: solve the directions it constrains, predict the rest "
                           "(off: the frame fails)",

@@ -175,6 +175,7 @@ const char* toString(TrackStatus status) {
     case TrackStatus::kDegenerate: return "degenerate";
     case TrackStatus::kDiverged: return "diverged";
     case TrackStatus::kBadInput: return "bad_input";
+    case TrackStatus::kLowOverlap: return "low_overlap";
   }
   return "unknown";
 }
@@ -194,6 +195,7 @@ std::vector<std::string> TrackerConfig::validate() const {
   v.requireInRange("min_inverse_condition", min_inverse_condition, 0.0, 1.0);
   v.requirePositive("max_final_step", max_final_step);
   v.merge("noise.", noise.validate());
+  v.requireInRange("min_overlap", min_overlap, 0.0, 1.0);
   v.requirePositive("max_translation_m", max_translation_m);
   v.requirePositive("max_rotation_rad", max_rotation_rad);
   return v.list();
@@ -222,9 +224,11 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
   const float huber_k = static_cast<float>(config_.huber_coefficient * map.positiveTruncation());
   Eigen::Isometry3d T_W_C = T_W_C_guess;
   NormalEquations last;
+  size_t finest_level_points = 0;
   std::unique_ptr<FieldSampler> field;
   for (const PyramidLevel& level : config_.levels) {
     const std::vector<Eigen::Vector3f> points_C = backProjectSubsampled(depth, camera, level.stride);
+    finest_level_points = points_C.size();
     // The first level's points span the image; a few centimetres cover the motion of a frame.
     if (!field) field = map.sampler(regionReached(points_C, T_W_C_guess, kSamplerMargin * map.voxelSize()));
     int iterations = 0;
@@ -259,6 +263,7 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
   result.T_W_C = T_W_C;
   result.valid_points = last.count;
   result.rms_residual_m = last.count > 0 ? std::sqrt(last.squared_residual_sum / last.count) : 0.0;
+  result.overlap = finest_level_points > 0 ? static_cast<double>(last.count) / finest_level_points : 0.0;
   if (last.count > 0) {
     const ScaledEquations scaled = scaleEquations(last);
     result.inverse_condition = scaled.inverseCondition();
@@ -273,6 +278,12 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
         << " rad from the guess (limits " << config_.max_translation_m << " m, " << config_.max_rotation_rad
         << " rad)";
     return fail(TrackStatus::kDiverged, msg.str());
+  }
+  if (result.overlap < config_.min_overlap) {
+    msg << "at the estimate only " << std::lround(100.0 * result.overlap) << " % of the image's points lie near a "
+        << "mapped surface (need " << std::lround(100.0 * config_.min_overlap) << " %): converged in the wrong place, "
+        << "or the view is mostly new";
+    return fail(TrackStatus::kLowOverlap, msg.str());
   }
   if (result.constrained_rank < 6) {
     msg << "the geometry constrains " << result.constrained_rank << " of six degrees of freedom (inverse condition "

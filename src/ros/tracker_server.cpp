@@ -275,11 +275,19 @@ void TrackerServer::process(const Frame& frame) {
   if (!report.swap_warning.empty()) ROS_WARN("sdf_tracker: %s", report.swap_warning.c_str());
   if (!report.swap_error.empty()) ROS_ERROR_THROTTLE(kThrottle_s, "sdf_tracker: %s", report.swap_error.c_str());
 
+  // The message's constants are the core's statuses, in the same order.
+  using Msg = sdf_tracker::TrackingStatus;
+  using Status = st::TrackStatus;
+  static_assert(int(Status::kOk) == Msg::OK && int(Status::kNotConverged) == Msg::NOT_CONVERGED &&
+                int(Status::kTooFewPoints) == Msg::TOO_FEW_POINTS && int(Status::kDegenerate) == Msg::DEGENERATE &&
+                int(Status::kDiverged) == Msg::DIVERGED && int(Status::kBadInput) == Msg::BAD_INPUT &&
+                int(Status::kLowOverlap) == Msg::LOW_OVERLAP);
   status.status = static_cast<uint8_t>(t.status);
   status.status_text = statusText(t);
   status.iterations_per_level = t.iterations_per_level;
   status.rms_residual_m = t.rms_residual_m;
   status.valid_points = t.valid_points;
+  status.overlap = t.overlap;
   status.inverse_condition = t.inverse_condition;
   status.constrained_rank = t.constrained_rank;
   status.tracking_ms = report.tracking_ms;

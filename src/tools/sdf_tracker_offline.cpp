@@ -269,7 +269,7 @@ int run(int argc, char** argv) {
             << " m, schedule " << st::formatSchedule(pipeline.config().tracker.levels) << "\n";
 
   std::ostringstream frames_csv;
-  frames_csv << "timestamp,status,iterations,rms_residual_m,valid_points,inverse_condition,constrained_rank,"
+  frames_csv << "timestamp,status,iterations,rms_residual_m,valid_points,overlap,inverse_condition,constrained_rank,"
                 "tracking_ms,fusion_ms,fused,map_mb,message\n";
   std::vector<st::io::StampedPose> trajectory;
   std::vector<double> frame_ms, tracking_ms, fusion_ms, raycast_ms;
@@ -317,7 +317,8 @@ int run(int argc, char** argv) {
     std::replace(message.begin(), message.end(), ',', ';');
     frames_csv << std::fixed << std::setprecision(6) << sequence.timestamp(i) << ',' << st::toString(t.status) << ','
                << joinIterations(t.iterations_per_level) << ',' << std::setprecision(6) << t.rms_residual_m << ','
-               << t.valid_points << ',' << std::setprecision(6) << t.inverse_condition << ',' << t.constrained_rank
+               << t.valid_points << ',' << std::setprecision(3) << t.overlap << ',' << std::setprecision(6)
+               << t.inverse_condition << ',' << t.constrained_rank
                << ',' << std::setprecision(3) << report.tracking_ms << ',' << report.fusion_ms << ','
                << (report.fused ? 1 : 0) << ',' << pipeline.map().memoryBytes() / 1048576.0 << ',' << message << '\n';
     progress.update(i + 1);

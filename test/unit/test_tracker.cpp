@@ -108,6 +108,44 @@ TEST_F(TrackerFixture, FramesOutsideTheMapHaveTooFewPoints) {
   EXPECT_TRUE(result.T_W_C.isApprox(far_away));
 }
 
+TEST(Tracker, AnEstimateThatFitsOnlyPartOfTheImageHasLowOverlap) {
+  // The whole room in 2 cm voxels, so that the map has seen everything the first view shows.
+  VolumeConfig whole_room;
+  whole_room.dims = Eigen::Vector3i(260, 150, 260);
+  whole_room.voxel_size_m = 0.02;
+  whole_room.origin_W = Eigen::Vector3d(-2.6, -1.6, -1.6);
+  const PinholeCamera camera = test::testCamera();
+  const Eigen::Isometry3d T_W_C = synthetic::cameraPose(synthetic::Motion::kDesk, 0.0, 10.0);
+  const DepthImage depth = test::renderRoom(T_W_C, camera);
+  TsdfVolume volume(whole_room);
+  Integrator(IntegratorConfig{}).integrate(depth, camera, T_W_C, &volume);
+
+  // The right two thirds of the image are pushed 1 m behind the walls, where the map has seen
+  // nothing: the left third alone still pins the pose, as when tracking locks onto a part of a
+  // view after a loss.
+  DepthImage partial = depth;
+  for (int v = 0; v < partial.height(); ++v) {
+    for (int u = partial.width() / 3; u < partial.width(); ++u) partial.at(u, v) += 1.0f;
+  }
+  const Eigen::Isometry3d guess = test::perturbed(T_W_C, 0.01, 0.01);
+  TrackerConfig config;
+  config.min_overlap = 0.5;
+  const TrackResult whole = Tracker(config).track(depth, camera, volume, guess);
+  EXPECT_TRUE(whole.ok()) << whole.message;
+  EXPECT_GT(whole.overlap, 0.7) << "grazing and far surfaces keep it below 1";
+
+  const TrackResult gated = Tracker(config).track(partial, camera, volume, guess);
+  EXPECT_EQ(gated.status, TrackStatus::kLowOverlap) << gated.message;
+  EXPECT_FALSE(gated.tracked());
+  EXPECT_TRUE(gated.T_W_C.isApprox(guess)) << "a frame that fails holds the guess";
+  EXPECT_NEAR(gated.overlap, whole.overlap / 3.0, 0.08) << "a third of the image still fits";
+  EXPECT_NE(gated.message.find("% of the image's points lie near a mapped surface (need 50 %)"), std::string::npos)
+      << gated.message;
+
+  config.min_overlap = 0.0;  // the paper: no such test
+  EXPECT_TRUE(Tracker(config).track(partial, camera, volume, guess).ok());
+}
+
 /// A single wall 2 m ahead of the camera at the origin (facing +z), mapped from there: distance
 /// and tilt are constrained, sliding along the wall and rolling about its normal are not.
 class WallFixture : public ::testing::Test {
@@ -193,11 +231,14 @@ TEST(TrackerConfig, RejectsEveryInvalidValue) {
   TrackerConfig config;
   config.levels = {{0, 5}, {2, -1}};
   config.huber_coefficient = -1.0;
+  config.min_overlap = 1.5;
   const auto violations = config.validate();
-  ASSERT_EQ(violations.size(), 3u);
+  ASSERT_EQ(violations.size(), 4u);
   EXPECT_NE(violations[0].find("levels[0].stride"), std::string::npos);
   EXPECT_NE(violations[1].find("levels[1].max_iterations"), std::string::npos);
   EXPECT_NE(violations[2].find("huber_coefficient must be > 0 (got -1)"), std::string::npos);
+  EXPECT_NE(violations[3].find("min_overlap"), std::string::npos) << violations[3];
+  EXPECT_NE(violations[3].find("1.5"), std::string::npos) << violations[3];
   config.levels.clear();
   EXPECT_THROW(Tracker{config}, std::invalid_argument);
 }

@@ -48,6 +48,12 @@ struct TrackerConfig {
   bool solve_constrained_directions = false;
   /// A final step |delta xi| larger than this: kNotConverged.
   double max_final_step = 5e-3;
+  /// At the estimate, fewer than this fraction of the finest level's points lie in the truncation
+  /// band of a mapped surface: kLowOverlap. Tracking that converged in the wrong place (typically
+  /// when it resumes after a loss) fits only a part of the image; frame-to-frame overlap keeps
+  /// tracked frames above 0.75 on real sequences, above 0.55 on the synthetic house walk
+  /// (bench/results/2026-11-23_real_data_limits.md). 0: off (the paper).
+  double min_overlap = 0.0;
   /// Motion from the guess beyond either limit: kDiverged (larger than a hand-held camera moves
   /// between two frames at 30 Hz, and beyond the truncation band's basin of convergence).
   double max_translation_m = 0.25;
@@ -64,6 +70,7 @@ enum class TrackStatus {
                   ///< With solve_constrained_directions the pose is still estimated (see tracked()).
   kDiverged,      ///< the solution ran away or became non-finite.
   kBadInput,      ///< the depth image is empty, of the wrong size, or holds no measurement.
+  kLowOverlap,    ///< at the estimate, too few of the image's points lie near mapped surfaces.
 };
 
 const char* toString(TrackStatus status);
@@ -76,6 +83,8 @@ struct TrackResult {
   std::vector<int> iterations_per_level;
   double rms_residual_m = 0.0;  ///< RMS of D at the valid points of the last iteration.
   int valid_points = 0;         ///< points used in the last iteration.
+  /// valid_points over the points the finest level back-projected.
+  double overlap = 0.0;
   double inverse_condition = 0.0;
   /// How many of the six directions the geometry constrained in the last iteration.
   int constrained_rank = 0;
