@@ -224,11 +224,11 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
   const float huber_k = static_cast<float>(config_.huber_coefficient * map.positiveTruncation());
   Eigen::Isometry3d T_W_C = T_W_C_guess;
   NormalEquations last;
-  size_t finest_level_points = 0;
+  size_t last_level_points = 0;
   std::unique_ptr<FieldSampler> field;
   for (const PyramidLevel& level : config_.levels) {
     const std::vector<Eigen::Vector3f> points_C = backProjectSubsampled(depth, camera, level.stride);
-    finest_level_points = points_C.size();
+    last_level_points = points_C.size();
     // The first level's points span the image; a few centimetres cover the motion of a frame.
     if (!field) field = map.sampler(regionReached(points_C, T_W_C_guess, kSamplerMargin * map.voxelSize()));
     int iterations = 0;
@@ -263,7 +263,7 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
   result.T_W_C = T_W_C;
   result.valid_points = last.count;
   result.rms_residual_m = last.count > 0 ? std::sqrt(last.squared_residual_sum / last.count) : 0.0;
-  result.overlap = finest_level_points > 0 ? static_cast<double>(last.count) / finest_level_points : 0.0;
+  result.overlap = last_level_points > 0 ? static_cast<double>(last.count) / last_level_points : 0.0;
   if (last.count > 0) {
     const ScaledEquations scaled = scaleEquations(last);
     result.inverse_condition = scaled.inverseCondition();

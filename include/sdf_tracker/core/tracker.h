@@ -48,10 +48,10 @@ struct TrackerConfig {
   bool solve_constrained_directions = false;
   /// A final step |delta xi| larger than this: kNotConverged.
   double max_final_step = 5e-3;
-  /// At the estimate, fewer than this fraction of the finest level's points lie in the truncation
-  /// band of a mapped surface: kLowOverlap. Tracking that converged in the wrong place (typically
-  /// when it resumes after a loss) fits only a part of the image; frame-to-frame overlap keeps
-  /// tracked frames above 0.75 on real sequences, above 0.55 on the synthetic house walk
+  /// At the estimate, fewer than this fraction of the last (finest) level's points lie in the
+  /// truncation band of a mapped surface: kLowOverlap. Tracking that converged in the wrong place
+  /// (typically when it resumes after a loss) fits only a part of the image; frame-to-frame overlap
+  /// keeps tracked frames above 0.75 on real sequences, above 0.55 on the synthetic house walk
   /// (bench/results/2026-11-23_real_data_limits.md). 0: off (the paper).
   double min_overlap = 0.0;
   /// Motion from the guess beyond either limit: kDiverged (larger than a hand-held camera moves
@@ -83,7 +83,7 @@ struct TrackResult {
   std::vector<int> iterations_per_level;
   double rms_residual_m = 0.0;  ///< RMS of D at the valid points of the last iteration.
   int valid_points = 0;         ///< points used in the last iteration.
-  /// valid_points over the points the finest level back-projected.
+  /// valid_points over the points the last (finest) level back-projected.
   double overlap = 0.0;
   double inverse_condition = 0.0;
   /// How many of the six directions the geometry constrained in the last iteration.
