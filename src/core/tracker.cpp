@@ -63,6 +63,17 @@ std::vector<Eigen::Vector3f> backProjectSubsampled(const DepthImage& depth, cons
   return points_C;
 }
 
+/// How many of points_C, moved to the world by T_W_C, land where `map` could hold a value.
+size_t countHoldable(const std::vector<Eigen::Vector3f>& points_C, const TsdfMap& map,
+                     const Eigen::Isometry3d& T_W_C) {
+  const Eigen::Isometry3f T = T_W_C.cast<float>();
+  const int n = static_cast<int>(points_C.size());
+  size_t count = 0;
+#pragma omp parallel for schedule(static) reduction(+ : count)
+  for (int idx = 0; idx < n; ++idx) count += map.canHold(T * points_C[idx]);
+  return count;
+}
+
 /// Builds the normal equations at pose T_W_C. The increment is expressed about the camera centre c
 /// (world axes), so rotation and translation stay decoupled wherever the volume's origin lies:
 /// d/dxi D(exp(xi) (p - c) + c) = [ (p - c) x grad D ; grad D ].
@@ -224,15 +235,16 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
   const float huber_k = static_cast<float>(config_.huber_coefficient * map.positiveTruncation());
   Eigen::Isometry3d T_W_C = T_W_C_guess;
   NormalEquations last;
-  size_t last_level_points = 0;
+  Eigen::Isometry3d T_W_C_of_last = T_W_C;  // where `last` was built
+  std::vector<Eigen::Vector3f> points_C;  // the current level's
   std::unique_ptr<FieldSampler> field;
   for (const PyramidLevel& level : config_.levels) {
-    const std::vector<Eigen::Vector3f> points_C = backProjectSubsampled(depth, camera, level.stride);
-    last_level_points = points_C.size();
+    points_C = backProjectSubsampled(depth, camera, level.stride);
     // The first level's points span the image; a few centimetres cover the motion of a frame.
     if (!field) field = map.sampler(regionReached(points_C, T_W_C_guess, kSamplerMargin * map.voxelSize()));
     int iterations = 0;
     for (int it = 1; it <= level.max_iterations; ++it) {
+      T_W_C_of_last = T_W_C;
       last = buildNormalEquations(points_C, *field, map.positiveTruncation(), T_W_C, huber_k,
                                   config_.sensor_weights ? &config_.noise : nullptr, config_.normalize_by_gradient);
       if (last.count < config_.min_valid_points) {
@@ -263,7 +275,9 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
   result.T_W_C = T_W_C;
   result.valid_points = last.count;
   result.rms_residual_m = last.count > 0 ? std::sqrt(last.squared_residual_sum / last.count) : 0.0;
-  result.overlap = last_level_points > 0 ? static_cast<double>(last.count) / last_level_points : 0.0;
+  // Points beyond what the map could hold (outside a dense grid) are left out of the share.
+  const size_t holdable = countHoldable(points_C, map, T_W_C_of_last);
+  result.overlap = holdable > 0 ? static_cast<double>(last.count) / holdable : 0.0;
   if (last.count > 0) {
     const ScaledEquations scaled = scaleEquations(last);
     result.inverse_condition = scaled.inverseCondition();

@@ -120,12 +120,12 @@ TEST(Tracker, AnEstimateThatFitsOnlyPartOfTheImageHasLowOverlap) {
   TsdfVolume volume(whole_room);
   Integrator(IntegratorConfig{}).integrate(depth, camera, T_W_C, &volume);
 
-  // The right two thirds of the image are pushed 1 m behind the walls, where the map has seen
-  // nothing: the left third alone still pins the pose, as when tracking locks onto a part of a
-  // view after a loss.
+  // The right two thirds of the image are pulled 30 % nearer, into space the map has seen empty:
+  // the left third alone still pins the pose, as when tracking locks onto a part of a view after
+  // a loss.
   DepthImage partial = depth;
   for (int v = 0; v < partial.height(); ++v) {
-    for (int u = partial.width() / 3; u < partial.width(); ++u) partial.at(u, v) += 1.0f;
+    for (int u = partial.width() / 3; u < partial.width(); ++u) partial.at(u, v) *= 0.7f;
   }
   const Eigen::Isometry3d guess = test::perturbed(T_W_C, 0.01, 0.01);
   TrackerConfig config;
@@ -144,6 +144,28 @@ TEST(Tracker, AnEstimateThatFitsOnlyPartOfTheImageHasLowOverlap) {
 
   config.min_overlap = 0.0;  // the paper: no such test
   EXPECT_TRUE(Tracker(config).track(partial, camera, volume, guess).ok());
+}
+
+TEST_F(TrackerFixture, PointsOutsideADenseGridDoNotCountAgainstOverlap) {
+  // The fixture's grid leaves the room's far walls out: about half of the image lands outside
+  // it, where the map can never hold a value. Those points say nothing about the fit.
+  size_t outside = 0, measured = 0;
+  for (int v = 0; v < depth.height(); v += 2) {
+    for (int u = 0; u < depth.width(); u += 2) {
+      const float z = depth.at(u, v);
+      if (!DepthImage::isMeasurement(z)) continue;
+      ++measured;
+      outside += !volume->canHold((T_W_C * camera.backProject(u, v, z).cast<double>()).cast<float>());
+    }
+  }
+  ASSERT_GT(outside, measured / 3) << "the test needs a view that reaches well beyond the grid";
+
+  TrackerConfig config;
+  config.min_overlap = 0.5;
+  const TrackResult result = Tracker(config).track(depth, camera, *volume, test::perturbed(T_W_C, 0.01, 0.01));
+  EXPECT_TRUE(result.ok()) << result.message;
+  EXPECT_GT(result.overlap, 0.7) << "the grid was fused from this very view";
+  EXPECT_LE(result.overlap, 1.0);
 }
 
 /// A single wall 2 m ahead of the camera at the origin (facing +z), mapped from there: distance

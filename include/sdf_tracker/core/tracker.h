@@ -83,7 +83,8 @@ struct TrackResult {
   std::vector<int> iterations_per_level;
   double rms_residual_m = 0.0;  ///< RMS of D at the valid points of the last iteration.
   int valid_points = 0;         ///< points used in the last iteration.
-  /// valid_points over the points the last (finest) level back-projected.
+  /// valid_points over the points of the last (finest) level that land, at the estimate, where
+  /// the map could hold a value (inside a dense grid; anywhere for the sparse map).
   double overlap = 0.0;
   double inverse_condition = 0.0;
   /// How many of the six directions the geometry constrained in the last iteration.

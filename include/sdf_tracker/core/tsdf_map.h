@@ -98,6 +98,10 @@ class TsdfMap {
     return true;
   }
 
+  /// Whether p_W lies where this map could ever hold a value: everywhere for a map that grows,
+  /// inside the grid for a dense one. Points outside say nothing about how well a pose fits.
+  virtual bool canHold(const Eigen::Vector3f& p_W) const { return p_W.allFinite(); }
+
   /// A sampler prepared for points in region_W: as fast as the storage allows there (a sparse map
   /// indexes the region's blocks directly instead of hashing per sample); points outside it still
   /// sample correctly, only slower. The map must outlive it and stay unchanged while it is used.
