@@ -63,14 +63,16 @@ std::vector<Eigen::Vector3f> backProjectSubsampled(const DepthImage& depth, cons
   return points_C;
 }
 
-/// How many of points_C, moved to the world by T_W_C, land where `map` could hold a value.
-size_t countHoldable(const std::vector<Eigen::Vector3f>& points_C, const TsdfMap& map,
-                     const Eigen::Isometry3d& T_W_C) {
+/// How many of points_C, moved to the world by T_W_C, land in region_W.
+size_t countInside(const std::vector<Eigen::Vector3f>& points_C, const Eigen::Isometry3d& T_W_C,
+                   const Eigen::AlignedBox3f& region_W) {
+  // All of space (a map that grows): every point is inside, no need to look.
+  if (region_W.min().array().isInf().all() && region_W.max().array().isInf().all()) return points_C.size();
   const Eigen::Isometry3f T = T_W_C.cast<float>();
   const int n = static_cast<int>(points_C.size());
   size_t count = 0;
 #pragma omp parallel for schedule(static) reduction(+ : count)
-  for (int idx = 0; idx < n; ++idx) count += map.canHold(T * points_C[idx]);
+  for (int idx = 0; idx < n; ++idx) count += region_W.contains(T * points_C[idx]);
   return count;
 }
 
@@ -276,7 +278,7 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
   result.valid_points = last.count;
   result.rms_residual_m = last.count > 0 ? std::sqrt(last.squared_residual_sum / last.count) : 0.0;
   // Points beyond what the map could hold (outside a dense grid) are left out of the share.
-  const size_t holdable = countHoldable(points_C, map, T_W_C_of_last);
+  const size_t holdable = countInside(points_C, T_W_C_of_last, map.holdableRegion());
   result.overlap = holdable > 0 ? static_cast<double>(last.count) / holdable : 0.0;
   if (last.count > 0) {
     const ScaledEquations scaled = scaleEquations(last);

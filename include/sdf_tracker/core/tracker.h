@@ -48,11 +48,11 @@ struct TrackerConfig {
   bool solve_constrained_directions = false;
   /// A final step |delta xi| larger than this: kNotConverged.
   double max_final_step = 5e-3;
-  /// At the estimate, fewer than this fraction of the last (finest) level's points lie in the
-  /// truncation band of a mapped surface: kLowOverlap. Tracking that converged in the wrong place
-  /// (typically when it resumes after a loss) fits only a part of the image; frame-to-frame overlap
-  /// keeps tracked frames above 0.75 on real sequences, above 0.55 on the synthetic house walk
-  /// (bench/results/2026-11-23_real_data_limits.md). 0: off (the paper).
+  /// At the estimate, fewer than this fraction of the last (finest) level's points (of those the
+  /// map could hold) lie in the truncation band of a mapped surface: kLowOverlap. Tracking that
+  /// converged in the wrong place (typically when it resumes after a loss) fits only a part of the
+  /// image; frame-to-frame overlap keeps tracked frames above 0.75 on real sequences, above 0.55
+  /// on the synthetic house walk (bench/results/2026-11-23_real_data_limits.md). 0: off (the paper).
   double min_overlap = 0.0;
   /// Motion from the guess beyond either limit: kDiverged (larger than a hand-held camera moves
   /// between two frames at 30 Hz, and beyond the truncation band's basin of convergence).

@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -98,9 +99,12 @@ class TsdfMap {
     return true;
   }
 
-  /// Whether p_W lies where this map could ever hold a value: everywhere for a map that grows,
-  /// inside the grid for a dense one. Points outside say nothing about how well a pose fits.
-  virtual bool canHold(const Eigen::Vector3f& p_W) const { return p_W.allFinite(); }
+  /// Where this map could ever hold a value: all of space for a map that grows, the lattice's
+  /// cells for a dense grid. Points outside say nothing about how well a pose fits.
+  virtual Eigen::AlignedBox3f holdableRegion() const {
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    return Eigen::AlignedBox3f(Eigen::Vector3f::Constant(-kInf), Eigen::Vector3f::Constant(kInf));
+  }
 
   /// A sampler prepared for points in region_W: as fast as the storage allows there (a sparse map
   /// indexes the region's blocks directly instead of hashing per sample); points outside it still

@@ -62,11 +62,9 @@ class TsdfVolume : public TsdfMap {
     return compact() ? compact_.size() * sizeof(CompactVoxel) : voxels_.size() * sizeof(Voxel);
   }
   std::unique_ptr<TsdfMap> clone() const override { return std::make_unique<TsdfVolume>(*this); }
-  /// Inside the lattice's cells, where a trilinear sample can exist.
-  bool canHold(const Eigen::Vector3f& p_W) const override {
-    size_t base;
-    Eigen::Vector3f frac;
-    return locate(p_W, &base, &frac);
+  /// The lattice's cells, where a trilinear sample can exist.
+  Eigen::AlignedBox3f holdableRegion() const override {
+    return Eigen::AlignedBox3f(position(0, 0, 0), position(config_.dims - Eigen::Vector3i::Ones()));
   }
 
   /// Sets every voxel back to (Dmax, 0): nothing observed.
