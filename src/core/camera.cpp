@@ -75,31 +75,59 @@ PinholeCamera PinholeCamera::scaledTo(int new_width, int new_height) const {
 namespace {
 
 /// TUM RGB-D's published colour-camera calibrations (vision.in.tum.de, "file formats"), 640x480.
-/// freiburg3's images were undistorted by TUM, so it needs no entry.
+/// freiburg3's images were undistorted by TUM: its distortion is zero.
 struct TumCalibration {
+  const char* name;
   double fx, fy, cx, cy;
   LensDistortion distortion;
+
+  PinholeCamera camera() const {
+    PinholeCamera c;
+    c.fx = fx, c.fy = fy, c.cx = cx, c.cy = cy;
+    c.width = 640, c.height = 480;
+    c.distortion = distortion;
+    return c;
+  }
 };
-constexpr TumCalibration kTumFreiburg1{517.3, 516.5, 318.6, 255.3, {0.2624, -0.9531, -0.0054, 0.0026, 1.1633}};
-constexpr TumCalibration kTumFreiburg2{520.9, 521.0, 325.1, 249.7, {0.2312, -0.7849, -0.0033, -0.0001, 0.9172}};
+constexpr TumCalibration kTumCameras[] = {
+    {"freiburg1", 517.3, 516.5, 318.6, 255.3, {0.2624, -0.9531, -0.0054, 0.0026, 1.1633}},
+    {"freiburg2", 520.9, 521.0, 325.1, 249.7, {0.2312, -0.7849, -0.0033, -0.0001, 0.9172}},
+    {"freiburg3", 535.4, 539.2, 320.1, 247.6, {}},
+};
+constexpr double kOpenNiDefaultFocal_px = 525.0;  ///< at 640x480
 
 }  // namespace
 
-PinholeCamera PinholeCamera::tumFreiburg1() {
+PinholeCamera PinholeCamera::tumFreiburg1() { return tumCamera("freiburg1")->withoutDistortion(); }
+
+std::optional<PinholeCamera> PinholeCamera::tumCamera(const std::string& name) {
+  for (const TumCalibration& c : kTumCameras) {
+    if (name == c.name) return c.camera();
+  }
+  return std::nullopt;
+}
+
+std::string PinholeCamera::tumCameraNames() {
+  std::string names;
+  for (const TumCalibration& c : kTumCameras) names += (names.empty() ? "" : ", ") + std::string(c.name);
+  return names;
+}
+
+PinholeCamera PinholeCamera::openNiDefault(int width, int height) {
   PinholeCamera camera;
-  camera.fx = kTumFreiburg1.fx;
-  camera.fy = kTumFreiburg1.fy;
-  camera.cx = kTumFreiburg1.cx;
-  camera.cy = kTumFreiburg1.cy;
-  camera.width = 640;
-  camera.height = 480;
+  camera.fx = camera.fy = kOpenNiDefaultFocal_px * width / 640.0;
+  camera.cx = (width - 1) / 2.0;
+  camera.cy = (height - 1) / 2.0;
+  camera.width = width;
+  camera.height = height;
   return camera;
 }
 
 std::optional<LensDistortion> PinholeCamera::tumPublishedDistortion(const PinholeCamera& camera) {
   constexpr double kTolerance_px = 0.05;
   if (camera.width != 640 || camera.height != 480) return std::nullopt;
-  for (const TumCalibration& c : {kTumFreiburg1, kTumFreiburg2}) {
+  for (const TumCalibration& c : kTumCameras) {
+    if (c.distortion.isZero()) continue;  // nothing to add
     if (std::abs(camera.fx - c.fx) <= kTolerance_px && std::abs(camera.fy - c.fy) <= kTolerance_px &&
         std::abs(camera.cx - c.cx) <= kTolerance_px && std::abs(camera.cy - c.cy) <= kTolerance_px) {
       return c.distortion;

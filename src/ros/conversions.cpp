@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include <sensor_msgs/distortion_models.h>
@@ -92,6 +93,44 @@ sdf_tracker::PinholeCamera toCamera(const sensor_msgs::CameraInfo& info) {
   }
   const auto violations = camera.validate();
   if (!violations.empty()) throw std::invalid_argument("camera_info: " + violations.front());
+  return camera;
+}
+
+sdf_tracker::PinholeCamera tumCameraNamed(const std::string& tum_camera) {
+  const std::optional<sdf_tracker::PinholeCamera> camera = sdf_tracker::PinholeCamera::tumCamera(tum_camera);
+  if (!camera) {
+    throw std::invalid_argument("tum_camera must be one of " + sdf_tracker::PinholeCamera::tumCameraNames() +
+                                ", or empty for camera_info's calibration (got \"" + tum_camera + "\")");
+  }
+  return *camera;
+}
+
+bool holdsOpenNiDefault(const sensor_msgs::CameraInfo& info) {
+  const auto guess =
+      sdf_tracker::PinholeCamera::openNiDefault(static_cast<int>(info.width), static_cast<int>(info.height));
+  const bool no_distortion = std::all_of(info.D.begin(), info.D.end(), [](double d) { return d == 0.0; });
+  return no_distortion && info.K[0] == guess.fx && info.K[4] == guess.fy && info.K[2] == guess.cx &&
+         info.K[5] == guess.cy && info.K[1] == 0.0;
+}
+
+sdf_tracker::PinholeCamera trackingCamera(const sensor_msgs::CameraInfo& info, const std::string& info_topic,
+                                          const std::string& tum_camera, double stamp_s, std::string* source) {
+  if (!tum_camera.empty()) {
+    const sdf_tracker::PinholeCamera camera = tumCameraNamed(tum_camera);
+    if (const std::string mismatch = camera.sizeMismatch(info.width, info.height); !mismatch.empty()) {
+      throw std::invalid_argument("~tum_camera " + tum_camera + ": " + mismatch);
+    }
+    *source = "~tum_camera " + tum_camera + ", TUM's published calibration";
+    return camera;
+  }
+  sdf_tracker::PinholeCamera camera = toCamera(info);
+  *source = info_topic;
+  // Drivers send D all zero when they know no distortion: the same rule as a sequence's.
+  if (camera.distortion.isZero()) {
+    std::string why;
+    camera.distortion = sdf_tracker::PinholeCamera::unstatedDistortion(camera, stamp_s, &why);
+    if (!why.empty()) *source += " with D all zero; " + why;
+  }
   return camera;
 }
 

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "sdf_tracker/core/validation.h"
+#include "sdf_tracker/ros/conversions.h"
 
 namespace sdf_tracker_ros {
 
@@ -84,6 +85,11 @@ const std::map<std::string, OptionSetter>& nodeOptionTable() {
       {"OutputVolume", [](NodeOptions& o, const st::ParameterValue& v) { o.output_volume = boolOf("OutputVolume", v); }},
       {"output_directory",
        [](NodeOptions& o, const st::ParameterValue& v) { o.output_directory = textOf("output_directory", v); }},
+      {"tum_camera",
+       [](NodeOptions& o, const st::ParameterValue& v) {
+         o.tum_camera = textOf("tum_camera", v);
+         if (!o.tum_camera.empty()) tumCameraNamed(o.tum_camera);  // refused here, before any frame
+       }},
       // Accepted for the reference release's launch file; rviz and ~reset replace its GUI.
       {"InteractiveMode", [](NodeOptions&, const st::ParameterValue& v) { boolOf("InteractiveMode", v); }},
   };
@@ -145,6 +151,9 @@ void readParameters(const ros::NodeHandle& pnh, st::Settings* settings, NodeOpti
       errors.require(false, std::string("~") + e.what());
     }
   }
+  errors.require(
+      options->tum_camera.empty() || !options->intrinsics_from_parameters,
+      "~tum_camera (" + options->tum_camera + ") and FocalLength/CenterPoint both give the intrinsics: set one");
   if (errors.list().empty()) errors.merge("", settings->validate());
   st::throwIfInvalid("parameters of " + pnh.getNamespace(), errors.list());
   std::vector<std::string> names;

@@ -160,21 +160,31 @@ st::PinholeCamera TrackerServer::cameraFor(const Frame& frame) {
       std::lock_guard<std::mutex> lock(mailbox_mutex_);
       info = last_info_;
     }
-    if (!warned_intrinsics_ && info && info->K[0] > 0.0 &&
+    if (!questioned_intrinsics_ && info && info->K[0] > 0.0 &&
         (std::abs(info->K[0] - camera.fx) > 1e-3 || std::abs(info->K[2] - camera.cx) > 1e-3)) {
       ROS_WARN("sdf_tracker: FocalLength/CenterPoint parameters (fx %.2f, cx %.2f) disagree with %s (fx %.2f, cx "
                "%.2f); using the parameters",
                camera.fx, camera.cx, info_topic_.c_str(), info->K[0], info->K[2]);
-      warned_intrinsics_ = true;
+      questioned_intrinsics_ = true;
     }
   } else {
-    camera = toCamera(*frame.info);
-    distortion_source = info_topic_;
-    // Drivers send D all zero when they know no distortion: the same rule as a sequence's.
-    if (camera.distortion.isZero()) {
-      std::string why;
-      camera.distortion = st::PinholeCamera::unstatedDistortion(camera, frame.image->header.stamp.toSec(), &why);
-      if (!why.empty()) distortion_source += " with D all zero; " + why;
+    camera = trackingCamera(*frame.info, info_topic_, options_.tum_camera, frame.image->header.stamp.toSec(),
+                            &distortion_source);
+    if (!questioned_intrinsics_) {
+      questioned_intrinsics_ = true;
+      const auto& K = frame.info->K;
+      const bool driver_default = holdsOpenNiDefault(*frame.info);
+      if (!options_.tum_camera.empty()) {
+        ROS_INFO("sdf_tracker: ~tum_camera %s: its calibration replaces %s (fx %.2f fy %.2f cx %.2f cy %.2f%s)",
+                 options_.tum_camera.c_str(), info_topic_.c_str(), K[0], K[4], K[2], K[5],
+                 driver_default ? ", the OpenNI driver's default" : "");
+      } else if (driver_default) {
+        ROS_WARN(
+            "sdf_tracker: %s holds the OpenNI driver's default intrinsics (fx = fy = %.1f, cx %.1f, cy %.1f, no "
+            "distortion), a guess rather than a calibration of this camera. A TUM RGB-D bag: set ~tum_camera "
+            "(%s; tum_bag.launch takes it from the bag's name). A live camera: calibrate it.",
+            info_topic_.c_str(), camera.fx, camera.cx, camera.cy, st::PinholeCamera::tumCameraNames().c_str());
+      }
     }
   }
   if (camera != announced_camera_) {

@@ -1,6 +1,6 @@
 // tum_to_bag: converts a TUM-layout folder into a rosbag shaped like the TUM RGB-D benchmark's own
 // bags of 2011, so the ROS workflow can be tried and tested exactly as with a downloaded bag.
-//   rosrun sdf_tracker tum_to_bag SEQUENCE_DIR OUT.bag [--frames N]
+//   rosrun sdf_tracker tum_to_bag SEQUENCE_DIR OUT.bag [--frames N] [--openni-default-intrinsics]
 // As in the benchmark's bags:
 //   /camera/depth/image (32FC1 metres, NaN = no data) + /camera/depth/camera_info,
 //   frame "/openni_depth_optical_frame" (with its leading slash);
@@ -10,6 +10,9 @@
 //   nothing on /tf_static;
 //   /camera/rgb/image_color (rgb8) + /camera/rgb/camera_info when the folder has rgb.txt, and
 //   /imu when it has accelerometer.txt ("timestamp ax ay az", m/s^2, in the depth camera's frame).
+// camera_info holds the sequence's intrinsics; with --openni-default-intrinsics it holds what the
+// benchmark's own bags hold instead: the OpenNI driver's default (fx = fy = 525, the image centre,
+// D all zero), which is not the camera's calibration (the node's ~tum_camera gives that).
 // The bag is written to a temporary file and renamed when complete: a failure leaves no bag.
 
 #include <cmath>
@@ -37,7 +40,7 @@ namespace {
 
 namespace st = sdf_tracker;
 
-constexpr const char* kUsage = "usage: tum_to_bag SEQUENCE_DIR OUT.bag [--frames N]";
+constexpr const char* kUsage = "usage: tum_to_bag SEQUENCE_DIR OUT.bag [--frames N] [--openni-default-intrinsics]";
 constexpr double kChainRate_hz = 30.0;  ///< as the openni driver re-published its static frames
 
 /// A link of the openni chain: parent, child, transform parent <- child.
@@ -127,7 +130,8 @@ sensor_msgs::Image readColourImage(const std::string& path, const std_msgs::Head
 }
 
 int run(int argc, char** argv) {
-  const st::tools::CommandLine args(argc, argv, {"frames"}, {"help"}, {"SEQUENCE_DIR", "OUT.bag"});
+  const st::tools::CommandLine args(argc, argv, {"frames"}, {"help", "openni-default-intrinsics"},
+                                    {"SEQUENCE_DIR", "OUT.bag"});
   if (args.has("help")) {
     std::cout << kUsage << "\n";
     return 0;
@@ -143,6 +147,13 @@ int run(int argc, char** argv) {
   const auto& gt = sequence.groundTruth();
   const auto colour = readTimedLines(args.positional(0) + "/rgb.txt");
   const auto accelerometer = readTimedLines(args.positional(0) + "/accelerometer.txt");
+  // What camera_info says about an image of the given size.
+  auto recordedCamera = [&](int width, int height) {
+    if (args.has("openni-default-intrinsics")) return st::PinholeCamera::openNiDefault(width, height);
+    st::PinholeCamera camera = sequence.camera();
+    camera.width = width, camera.height = height;
+    return camera;
+  };
 
   try {
     rosbag::Bag bag(temporary, rosbag::bagmode::Write);
@@ -183,9 +194,9 @@ int run(int argc, char** argv) {
         header.seq = static_cast<uint32_t>(colour_index);
         header.stamp = stamp(colour[colour_index].first);
         header.frame_id = "/openni_rgb_optical_frame";
-        const sensor_msgs::Image image = readColourImage(args.positional(0) + "/" + colour[colour_index].second, header);
-        st::PinholeCamera camera = sequence.camera();
-        camera.width = static_cast<int>(image.width), camera.height = static_cast<int>(image.height);
+        const sensor_msgs::Image image =
+            readColourImage(args.positional(0) + "/" + colour[colour_index].second, header);
+        const st::PinholeCamera camera = recordedCamera(static_cast<int>(image.width), static_cast<int>(image.height));
         bag.write("/camera/rgb/image_color", header.stamp, image);
         bag.write("/camera/rgb/camera_info", header.stamp, sdf_tracker_ros::toCameraInfo(camera, header));
         ++colour_index;
@@ -198,7 +209,8 @@ int run(int argc, char** argv) {
       header.stamp = stamp(sequence.timestamp(i));
       header.frame_id = "/openni_depth_optical_frame";
       bag.write("/camera/depth/image", header.stamp, sdf_tracker_ros::toImageMsg(sequence.depth(i), header));
-      bag.write("/camera/depth/camera_info", header.stamp, sdf_tracker_ros::toCameraInfo(sequence.camera(), header));
+      const st::PinholeCamera camera = recordedCamera(sequence.camera().width, sequence.camera().height);
+      bag.write("/camera/depth/camera_info", header.stamp, sdf_tracker_ros::toCameraInfo(camera, header));
     }
     writeUpTo(t_end + 0.1);  // the ground truth and chain just past the last frame
     bag.close();

@@ -516,6 +516,23 @@ std::pair<int, std::string> runCommand(const std::string& command) {
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
 }
 
+// The tracker refuses to start on a TUM camera it does not know, or on two sources of intrinsics,
+// and says which parameter and value; nothing is guessed.
+TEST(TrackerNode, RefusesAnUnknownTumCameraAndTwoSourcesOfIntrinsicsByName) {
+  const std::string node = "timeout 30 rosrun sdf_tracker sdf_tracker_node __name:=tum_camera_check ";
+  auto [code, output] = runCommand(node + "_tum_camera:=freiburg4");
+  EXPECT_EQ(code, 1) << output;
+  EXPECT_NE(output.find("~tum_camera must be one of freiburg1, freiburg2, freiburg3, or empty for camera_info's "
+                        "calibration (got \"freiburg4\")"),
+            std::string::npos)
+      << output;
+  std::tie(code, output) = runCommand(node + "_tum_camera:=freiburg1 _FocalLengthX:=500.0");
+  EXPECT_EQ(code, 1) << output;
+  EXPECT_NE(output.find("~tum_camera (freiburg1) and FocalLength/CenterPoint both give the intrinsics"),
+            std::string::npos)
+      << output;
+}
+
 // The camera drivers on a machine without a camera, or pointed at a recording that is not there:
 // an error that names what is missing, and a non-zero exit (roslaunch then ends the launch).
 TEST(CameraDrivers, WithoutACameraOrRecordingExitWithAnErrorNamingIt) {

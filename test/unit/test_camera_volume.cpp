@@ -89,6 +89,38 @@ TEST(LensDistortion, TumsPublishedDistortionBelongsToTumsIntrinsicsAndRecordings
   EXPECT_EQ(why, "") << "nothing to explain for a camera that is not TUM's";
 }
 
+TEST(PinholeCamera, TumCamerasCarryTheirPublishedCalibrationByName) {
+  const std::optional<PinholeCamera> freiburg1 = PinholeCamera::tumCamera("freiburg1");
+  ASSERT_TRUE(freiburg1.has_value());
+  EXPECT_EQ(freiburg1->withoutDistortion(), PinholeCamera::tumFreiburg1());
+  EXPECT_EQ(freiburg1->distortion, *PinholeCamera::tumPublishedDistortion(PinholeCamera::tumFreiburg1()));
+  const std::optional<PinholeCamera> freiburg2 = PinholeCamera::tumCamera("freiburg2");
+  ASSERT_TRUE(freiburg2.has_value());
+  EXPECT_DOUBLE_EQ(freiburg2->fx, 520.9);
+  EXPECT_DOUBLE_EQ(freiburg2->distortion.k1, 0.2312);
+  const std::optional<PinholeCamera> freiburg3 = PinholeCamera::tumCamera("freiburg3");
+  ASSERT_TRUE(freiburg3.has_value());
+  EXPECT_DOUBLE_EQ(freiburg3->fy, 539.2);
+  EXPECT_TRUE(freiburg3->distortion.isZero()) << "TUM undistorted freiburg3's images";
+  EXPECT_FALSE(PinholeCamera::tumPublishedDistortion(*freiburg3).has_value()) << "no distortion to add";
+  EXPECT_FALSE(PinholeCamera::tumCamera("fr1").has_value());
+  EXPECT_FALSE(PinholeCamera::tumCamera("").has_value());
+  EXPECT_EQ(PinholeCamera::tumCameraNames(), "freiburg1, freiburg2, freiburg3");
+}
+
+TEST(PinholeCamera, TheOpenNiDriversDefaultIsItsFocalLengthAtTheImageCentre) {
+  const PinholeCamera vga = PinholeCamera::openNiDefault(640, 480);
+  EXPECT_EQ(vga.fx, 525.0);
+  EXPECT_EQ(vga.fy, 525.0);
+  EXPECT_EQ(vga.cx, 319.5);
+  EXPECT_EQ(vga.cy, 239.5);
+  EXPECT_TRUE(vga.distortion.isZero());
+  const PinholeCamera qvga = PinholeCamera::openNiDefault(320, 240);
+  EXPECT_EQ(qvga.fx, 262.5);
+  EXPECT_EQ(qvga.cx, 159.5);
+  EXPECT_EQ(qvga.cy, 119.5);
+}
+
 TEST(PinholeCamera, ValidateRejectsANonFiniteDistortion) {
   PinholeCamera camera;
   camera.distortion.k2 = std::nan("");

@@ -91,6 +91,47 @@ TEST(Conversions, CameraInfoRoundTripsThroughTheCamera) {
   EXPECT_EQ(back.distortion, camera.distortion);
 }
 
+TEST(Conversions, ATumCameraReplacesTheBagsDriverDefaultCameraInfo) {
+  // What the benchmark's bags of 2011 carry: the OpenNI driver's default, stamped in Unix time.
+  std_msgs::Header header;
+  header.stamp = ros::Time(1305031102.16);
+  const sensor_msgs::CameraInfo recorded = toCameraInfo(sdf_tracker::PinholeCamera::openNiDefault(640, 480), header);
+  EXPECT_TRUE(holdsOpenNiDefault(recorded));
+  const double stamp_s = header.stamp.toSec();
+  std::string source;
+
+  const sdf_tracker::PinholeCamera as_recorded =
+      trackingCamera(recorded, "/camera/depth/camera_info", "", stamp_s, &source);
+  EXPECT_EQ(as_recorded, sdf_tracker::PinholeCamera::openNiDefault(640, 480)) << "no TUM camera: camera_info as it is";
+  EXPECT_EQ(source, "/camera/depth/camera_info");
+
+  const sdf_tracker::PinholeCamera freiburg1 =
+      trackingCamera(recorded, "/camera/depth/camera_info", "freiburg1", stamp_s, &source);
+  EXPECT_EQ(freiburg1, *sdf_tracker::PinholeCamera::tumCamera("freiburg1")) << "intrinsics and distortion";
+  EXPECT_FALSE(freiburg1.distortion.isZero());
+  EXPECT_NE(source.find("~tum_camera freiburg1"), std::string::npos) << source;
+
+  // camera_info that states TUM's freiburg1 intrinsics and D all zero gets TUM's distortion too.
+  const sensor_msgs::CameraInfo stated = toCameraInfo(sdf_tracker::PinholeCamera::tumFreiburg1(), header);
+  EXPECT_FALSE(holdsOpenNiDefault(stated));
+  EXPECT_EQ(trackingCamera(stated, "/camera/depth/camera_info", "", stamp_s, &source), freiburg1);
+
+  auto refusal = [&](const sensor_msgs::CameraInfo& info, const std::string& tum_camera) -> std::string {
+    try {
+      trackingCamera(info, "/camera/depth/camera_info", tum_camera, stamp_s, &source);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  const sensor_msgs::CameraInfo qvga = toCameraInfo(sdf_tracker::PinholeCamera::openNiDefault(320, 240), header);
+  EXPECT_TRUE(holdsOpenNiDefault(qvga));
+  EXPECT_EQ(refusal(qvga, "freiburg1"), "~tum_camera freiburg1: depth image is 320x240 but the camera is 640x480");
+  EXPECT_EQ(refusal(recorded, "freiburg4"),
+            "tum_camera must be one of freiburg1, freiburg2, freiburg3, or empty for camera_info's calibration "
+            "(got \"freiburg4\")");
+}
+
 TEST(Conversions, CameraInfoDistortionThePipelineCannotRemoveIsRefusedByName) {
   sensor_msgs::CameraInfo info = toCameraInfo(sdf_tracker::PinholeCamera(), std_msgs::Header());
   info.distortion_model = "rational_polynomial";

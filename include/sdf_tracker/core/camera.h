@@ -88,6 +88,17 @@ struct PinholeCamera {
   /// are registered), without lens distortion: see tumPublishedDistortion.
   static PinholeCamera tumFreiburg1();
 
+  /// The calibration TUM publishes for one of the benchmark's cameras ("freiburg1", "freiburg2",
+  /// "freiburg3"; 640x480), intrinsics and lens distortion; nothing for any other name. The
+  /// benchmark's bags do not carry it: their camera_info holds the OpenNI driver's default.
+  static std::optional<PinholeCamera> tumCamera(const std::string& name);
+  /// The names tumCamera knows, for messages: "freiburg1, freiburg2, freiburg3".
+  static std::string tumCameraNames();
+
+  /// What the OpenNI driver reported when it knew no calibration (the TUM bags of 2011 carry it):
+  /// fx = fy = 525 px at 640x480, the centre of the image, no distortion; scaled to the size.
+  static PinholeCamera openNiDefault(int width, int height);
+
   /// The lens distortion TUM publishes beside these intrinsics when they are a benchmark camera's
   /// (freiburg1 or freiburg2 at 640x480, matched to 0.05 px); nothing for any other camera. The
   /// benchmark's depth images are registered to that colour camera but not undistorted, and files

@@ -42,6 +42,10 @@ struct NodeOptions {
   std::string output_directory = ".";
   /// Intrinsics given explicitly (FocalLengthX/Y, CenterPointX/Y): used instead of camera_info.
   bool intrinsics_from_parameters = false;
+  /// A TUM RGB-D benchmark camera ("freiburg1", ...) whose published calibration replaces
+  /// camera_info's K and D, which in the benchmark's bags are the OpenNI driver's default; empty:
+  /// camera_info as published.
+  std::string tum_camera;
 };
 
 /// Strips leading slashes ("/openni_depth_optical_frame" -> "openni_depth_optical_frame"), as tf2

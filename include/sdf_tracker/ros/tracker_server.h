@@ -80,7 +80,8 @@ class TrackerServer {
   image_transport::Publisher denoised_pub_;
   ros::Time last_stamp_;
   std::vector<double> frame_ms_;  ///< the node's whole cost of each processed frame
-  bool warned_intrinsics_ = false;
+  /// The log has said once where the intrinsics come from when that deserves a word.
+  bool questioned_intrinsics_ = false;
   /// The camera last said in the log (said again when it changes).
   std::optional<sdf_tracker::PinholeCamera> announced_camera_;
   bool lost_ = false;
