@@ -113,6 +113,13 @@ std::string PinholeCamera::tumCameraNames() {
   return names;
 }
 
+std::string PinholeCamera::tumCameraMentionedIn(const std::string& name) {
+  for (const TumCalibration& c : kTumCameras) {
+    if (name.find(c.name) != std::string::npos) return c.name;
+  }
+  return "";
+}
+
 PinholeCamera PinholeCamera::openNiDefault(int width, int height) {
   PinholeCamera camera;
   camera.fx = camera.fy = kOpenNiDefaultFocal_px * width / 640.0;

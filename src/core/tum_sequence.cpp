@@ -1,5 +1,6 @@
 #include "sdf_tracker/core/tum_sequence.h"
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -67,8 +68,14 @@ TumSequence TumSequence::open(const std::string& directory, const SequenceOption
   }
   if (sequence.frames_.empty()) throw std::runtime_error(list_path + ": lists no depth frames");
 
-  sequence.camera_ = PinholeCamera::tumFreiburg1();
-  sequence.intrinsics_source_ = "TUM freiburg1 defaults";
+  // TUM's downloads carry no intrinsics file; their folder's name says which camera took them.
+  std::filesystem::path folder = std::filesystem::path(directory).lexically_normal();
+  if (folder.filename().empty()) folder = folder.parent_path();  // "dir/"
+  const std::string named = PinholeCamera::tumCameraMentionedIn(folder.filename().string());
+  sequence.camera_ =
+      named.empty() ? PinholeCamera::tumFreiburg1() : PinholeCamera::tumCamera(named)->withoutDistortion();
+  sequence.intrinsics_source_ =
+      named.empty() ? "TUM freiburg1 defaults" : "TUM " + named + ", from the folder's name";
   bool distortion_given = false;
   const std::string intrinsics_path = directory + "/intrinsics.txt";
   if (fileExists(intrinsics_path)) {

@@ -299,6 +299,24 @@ TEST(TumSequence, ReadsIntrinsicsFileOrFallsBackToFreiburg1) {
   EXPECT_THROW(TumSequence::open(dir + "/missing"), std::runtime_error);
 }
 
+TEST(TumSequence, AFolderNamedLikeATumDownloadGetsThatCamerasCalibration) {
+  synthetic::SequenceSpec spec;
+  spec.frames = 1;
+  for (const std::string camera : {"freiburg1", "freiburg2", "freiburg3"}) {
+    const std::string dir = test::scratchDirectory("rgbd_dataset_" + camera + "_desk");
+    synthetic::writeSequence(dir, spec);
+    std::remove((dir + "/intrinsics.txt").c_str());  // as TUM's downloads
+    // Stamped as TUM stamped its recordings, which is when TUM's distortion is assumed.
+    const std::string first = TumSequence::open(dir).depthPath(0).substr(dir.size() + 1);
+    writeFile(dir + "/depth.txt", "1305031102.160407 " + first + "\n");
+    for (const std::string& path : {dir, dir + "/"}) {
+      const TumSequence sequence = TumSequence::open(path);
+      EXPECT_EQ(sequence.camera(), *PinholeCamera::tumCamera(camera)) << path;
+      EXPECT_EQ(sequence.intrinsicsSource(), "TUM " + camera + ", from the folder's name");
+    }
+  }
+}
+
 TEST(TumSequence, LensDistortionComesFromTheFileOrTumsPublishedCalibration) {
   const std::string dir = test::scratchDirectory("seq_distortion");
   synthetic::SequenceSpec spec;

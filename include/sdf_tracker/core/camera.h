@@ -94,6 +94,9 @@ struct PinholeCamera {
   static std::optional<PinholeCamera> tumCamera(const std::string& name);
   /// The names tumCamera knows, for messages: "freiburg1, freiburg2, freiburg3".
   static std::string tumCameraNames();
+  /// The name of the TUM camera that `name` mentions, as the benchmark names its downloads
+  /// (rgbd_dataset_freiburg2_desk -> "freiburg2"); empty when it mentions none.
+  static std::string tumCameraMentionedIn(const std::string& name);
 
   /// What the OpenNI driver reported when it knew no calibration (the TUM bags of 2011 carry it):
   /// fx = fy = 525 px at 640x480, the centre of the image, no distortion; scaled to the size.

@@ -21,8 +21,9 @@ struct SequenceOptions {
 
 /// A depth sequence in the TUM RGB-D layout: depth.txt ("timestamp depth/<file>.png"), 16-bit
 /// PNGs, optional groundtruth.txt and intrinsics.txt (kIntrinsicsColumns).
-/// Intrinsics and depth factor come from the options, else intrinsics.txt, else the TUM
-/// freiburg1 defaults (517.3, 516.5, 318.6, 255.3; factor 5000). The lens distortion comes from
+/// Intrinsics and depth factor come from the options, else intrinsics.txt, else the TUM camera
+/// the folder's name mentions (rgbd_dataset_freiburg2_desk: freiburg2's calibration), else the
+/// TUM freiburg1 defaults (517.3, 516.5, 318.6, 255.3); factor 5000. The lens distortion comes from
 /// the options, else intrinsics.txt's last five columns; when neither gives it, the intrinsics
 /// are a TUM benchmark camera's and the frames are stamped in Unix time as TUM's recordings are,
 /// it is the distortion TUM publishes with them (the benchmark's depth is not undistorted); else none.
@@ -39,7 +40,8 @@ class TumSequence {
 
   const PinholeCamera& camera() const { return camera_; }
   double depthFactor() const { return depth_factor_; }
-  /// Where the intrinsics came from, for the user: "options", "intrinsics.txt" or "TUM freiburg1 defaults".
+  /// Where the intrinsics came from, for the user: "options", "intrinsics.txt", "TUM freiburg2, from
+  /// the folder's name" or "TUM freiburg1 defaults".
   const std::string& intrinsicsSource() const { return intrinsics_source_; }
   /// Where the lens distortion came from, or why there is none, for the user: "none stated",
   /// "options", "intrinsics.txt", TUM's published calibration, or why that was not assumed.
