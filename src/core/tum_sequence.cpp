@@ -69,11 +69,11 @@ TumSequence TumSequence::open(const std::string& directory, const SequenceOption
   if (sequence.frames_.empty()) throw std::runtime_error(list_path + ": lists no depth frames");
 
   // TUM's downloads carry no intrinsics file; their folder's name says which camera took them.
+  // The lens distortion is decided below, with the recording's stamps, as for any unstated one.
   std::filesystem::path folder = std::filesystem::path(directory).lexically_normal();
   if (folder.filename().empty()) folder = folder.parent_path();  // "dir/"
   const std::string named = PinholeCamera::tumCameraMentionedIn(folder.filename().string());
-  sequence.camera_ =
-      named.empty() ? PinholeCamera::tumFreiburg1() : PinholeCamera::tumCamera(named)->withoutDistortion();
+  sequence.camera_ = PinholeCamera::tumCamera(named.empty() ? "freiburg1" : named)->withoutDistortion();
   sequence.intrinsics_source_ =
       named.empty() ? "TUM freiburg1 defaults" : "TUM " + named + ", from the folder's name";
   bool distortion_given = false;

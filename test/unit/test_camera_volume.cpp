@@ -92,6 +92,9 @@ TEST(LensDistortion, TumsPublishedDistortionBelongsToTumsIntrinsicsAndRecordings
 TEST(PinholeCamera, TumCamerasCarryTheirPublishedCalibrationByName) {
   const std::optional<PinholeCamera> freiburg1 = PinholeCamera::tumCamera("freiburg1");
   ASSERT_TRUE(freiburg1.has_value());
+  EXPECT_DOUBLE_EQ(freiburg1->fx, 517.3);
+  EXPECT_DOUBLE_EQ(freiburg1->cy, 255.3);
+  EXPECT_DOUBLE_EQ(freiburg1->distortion.k1, 0.2624);
   EXPECT_EQ(freiburg1->withoutDistortion(), PinholeCamera::tumFreiburg1());
   EXPECT_EQ(freiburg1->distortion, *PinholeCamera::tumPublishedDistortion(PinholeCamera::tumFreiburg1()));
   const std::optional<PinholeCamera> freiburg2 = PinholeCamera::tumCamera("freiburg2");
