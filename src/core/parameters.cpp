@@ -174,8 +174,10 @@ constexpr Readers kAll = Readers::kAll;
 constexpr Readers kNodeOnly = Readers::kNodeOnly;
 constexpr bool kLive = true;
 constexpr bool kAtStart = false;
-/// The dense grid's extent along x, y and z: read by MapType=dense only.
+/// The dense grid's extent along x, y and z, and the first camera's place in it: read by
+/// MapType=dense only.
 constexpr const char* kGridSizeParameters[] = {"GridSizeX", "GridSizeY", "GridSizeZ"};
+constexpr const char* kInitialCameraParameters[] = {"InitialCameraX", "InitialCameraY", "InitialCameraZ"};
 
 Range closed(double low, double high) { return {low, high, false, false}; }
 Range leftOpen(double low, double high) { return {low, high, true, false}; }
@@ -317,10 +319,9 @@ std::vector<ParameterSpec> buildTable() {
   t.push_back(bound<int>("ResetAfterFailures", "frames", "clear the map after this many failed frames in a row; 0 never",
                          closed(0, 1e6), same(0), kLive, kAll,
                          [](auto& s) -> auto& { return s.pipeline.reset_after_failures; }));
-  const char* axes[] = {"X", "Y", "Z"};
   for (int axis = 0; axis < 3; ++axis) {
-    t.push_back(bound<double>(std::string("InitialCamera") + axes[axis], "",
-                              std::string("first camera's place in the grid along ") + char('x' + axis) +
+    t.push_back(bound<double>(kInitialCameraParameters[axis], "",
+                              std::string("dense grid: first camera's place along ") + char('x' + axis) +
                                   " (fraction of the extent)",
                               closed(-1.0, 2.0), same(axis == 2 ? 0.0 : 0.5), kAtStart, kAll,
                               [axis](auto& s) -> auto& { return s.pipeline.initial_camera_in_grid[axis]; }));
@@ -404,13 +405,16 @@ std::vector<std::string> Settings::withoutEffect(const std::vector<std::string>&
   if (pipeline.volume.type == MapType::kSparse) {
     std::string grid;
     int count = 0;
-    for (const char* name : kGridSizeParameters) {
-      if (std::find(given.begin(), given.end(), name) == given.end()) continue;
-      grid += (count++ ? ", " : "") + std::string(name) + "=" + toText(findParameter(name)->get(*this));
+    for (const auto& names : {kGridSizeParameters, kInitialCameraParameters}) {
+      for (int axis = 0; axis < 3; ++axis) {
+        if (std::find(given.begin(), given.end(), names[axis]) == given.end()) continue;
+        grid += (count++ ? ", " : "") + std::string(names[axis]) + "=" + toText(findParameter(names[axis])->get(*this));
+      }
     }
     if (count > 0) {
       notes.push_back(grid + (count > 1 ? " have" : " has") + " no effect with MapType=sparse, whose blocks grow "
-                      "with the scene; set MapType=dense for one grid of that size");
+                      "with the scene wherever the camera goes; set MapType=dense for one grid sized and placed "
+                      "by them");
     }
   }
   return notes;

@@ -68,10 +68,15 @@ TEST(Parameters, AGridSizeGivenForTheSparseMapIsAcceptedAndTheUserToldItHasNoEff
   EXPECT_EQ(notes[0].rfind("GridSizeX=200, GridSizeZ=120 have no effect with MapType=sparse", 0), 0u) << notes[0];
   EXPECT_NE(notes[0].find("set MapType=dense"), std::string::npos) << notes[0];
   EXPECT_TRUE(sparse.withoutEffect({"CellSize", "MaxMemoryMB"}).empty()) << "only what the user gave is named";
+  setParameter(&sparse, "InitialCameraY", 0.3);
+  const std::vector<std::string> placed = sparse.withoutEffect({"InitialCameraY"});
+  ASSERT_EQ(placed.size(), 1u);
+  EXPECT_EQ(placed[0].rfind("InitialCameraY=0.3 has no effect with MapType=sparse", 0), 0u) << placed[0];
 
   Settings dense = sparse;
   setParameter(&dense, "MapType", std::string("dense"));
-  EXPECT_TRUE(dense.withoutEffect({"GridSizeX", "GridSizeZ"}).empty()) << "the dense grid reads them";
+  EXPECT_TRUE(dense.withoutEffect({"GridSizeX", "GridSizeZ", "InitialCameraY"}).empty())
+      << "the dense grid reads them";
 }
 
 TEST(Parameters, TypesAreCheckedAndIntegersConvertOnlyWhenExact) {
