@@ -3,11 +3,14 @@
 # like the TUM RGB-D benchmark's and played with the README's command
 #   roslaunch sdf_tracker tum_bag.launch bag:=... rviz:=false
 # once on an idle machine and once beside one busy process (a CPU-bound loop, as another program on a
-# robot). For each run it prints frames processed, the node's ms per frame (conversion, tracking,
+# robot). A TUM freiburg1 sequence (tum_fr1_*) becomes the bag TUM published for it: named
+# rgbd_dataset_freiburg1_*.bag, so tum_bag.launch picks freiburg1's calibration from the name, and
+# with the OpenNI driver's default intrinsics in camera_info, as the 2011 bags have. For each run it prints frames processed, the node's ms per frame (conversion, tracking,
 # fusion, publishing), ATE against the ground truth, and whether any frame on /tf had two parents;
 # the offline runner on the same frames gives the reference ATE and ms per frame.
 #   bash bench/node_bench.sh [SEQUENCE_DIR ...]   (default: fr1_xyz and redkitchen from SDF_TRACKER_DATA)
-#   RUNS="idle busy rviz" picks the runs (default: idle busy); rviz runs with rviz on, under xvfb-run.
+#   RUNS="idle busy" picks the runs (default: idle busy rviz); rviz runs with rviz on, under xvfb-run
+#   (installed from Debian when missing), rendering in software on the same cores.
 # Writes bench/results/<date>_node.md (<date>_node_<runs>.md with RUNS). No test asserts these figures.
 set -euo pipefail
 # shellcheck source=common.sh
@@ -15,6 +18,10 @@ source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 bench_setup node
 runs_name="${RUNS:-}"
 report="$results/$(date +%Y-%m-%d)_node${runs_name:+_${runs_name// /_}}.md"
+read -r -a runs <<< "${RUNS:-idle busy rviz}"
+if [[ " ${runs[*]} " == *" rviz "* ]] && ! command -v xvfb-run > /dev/null; then
+  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq xvfb > /dev/null
+fi
 
 real_sequences "$@"
 
@@ -46,25 +53,29 @@ PY
   echo
   echo "\`roslaunch sdf_tracker tum_bag.launch bag:=... rviz:=false\` (default preset, rate 1.0) on $(nproc) cores;"
   echo "\"busy\": one CPU-bound process running beside it. ms per frame: the node's whole cost of a frame"
-  echo "(median). Offline: \`sdf_tracker_offline\` on the same frames (median tracking + fusion)."
+  echo "(median). Offline: \`sdf_tracker_offline\` on the same frames (median tracking + fusion). \"rviz\":"
+  echo "with rviz on, under xvfb-run (it renders in software on the same cores). fr1 sequences are played"
+  echo "as TUM's 2011 bags: named rgbd_dataset_freiburg1_*.bag, the driver's default in camera_info."
   echo
-  echo "| sequence | run | frames processed | node ms/frame | ATE | frames with two parents |"
-  echo "|---|---|---|---|---|---|"
+  echo "| sequence | bag | run | frames processed | node ms/frame | ATE | frames with two parents |"
+  echo "|---|---|---|---|---|---|---|"
 } > "$report"
 
 for sequence in "${sequences[@]}"; do
   name="$(basename "$sequence")"
-  bag="$work/$name.bag"
-  [ -f "$bag" ] || "$bin/tum_to_bag" "$sequence" "$bag" > "$work/$name.tum_to_bag.log"
+  case "$name" in
+    tum_fr1_*) bag="$work/rgbd_dataset_freiburg1_${name#tum_fr1_}.bag"; as_recorded=(--openni-default-intrinsics) ;;
+    *) bag="$work/$name.bag"; as_recorded=() ;;
+  esac
+  [ -f "$bag" ] || "$bin/tum_to_bag" "$sequence" "$bag" "${as_recorded[@]}" > "$work/$name.tum_to_bag.log"
   offset=$(grep -oE "shifted by [0-9.]+" "$work/$name.tum_to_bag.log" | awk '{print $3}' || true)
   frames=$(grep -cvE '^\s*(#|$)' "$sequence/depth.txt")
 
   "$bin/sdf_tracker_offline" --sequence "$sequence" --output "$work/$name.offline" --quiet > /dev/null
   off_ms=$(grep -oE "per frame \(ms\): median [0-9.]+" "$work/$name.offline/summary.txt" | awk '{print $5}')
   off_ate=$(grep -oE "ATE  RMSE [0-9.]+" "$work/$name.offline/summary.txt" | awk '{print $3}')
-  echo "| $name | offline | $frames of $frames | $off_ms | ${off_ate} m | - |" >> "$report"
+  echo "| $name | - | offline | $frames of $frames | $off_ms | ${off_ate} m | - |" >> "$report"
 
-  read -r -a runs <<< "${RUNS:-idle busy}"
   for run in "${runs[@]}"; do
     out="$work/$name.$run"
     mkdir -p "$out"
@@ -90,7 +101,7 @@ for sequence in "${sequences[@]}"; do
     ate=$("$bin/sdf_tracker_evaluate" --groundtruth "$sequence/groundtruth.txt" --estimate "$out/trajectory.txt" \
             --estimate-time-offset "${offset:-0}" 2>/dev/null | grep -oE "ATE  RMSE [0-9.]+" | awk '{print $3}' || echo "?")
     parents=$(two_parents "$out/tf.bag" 2>/dev/null || echo "?")
-    line="| $name | $run | $tracked of $frames ($((100 * tracked / frames)) %) | ${node_ms:-?} | ${ate} m | $parents |"
+    line="| $name | $(basename "$bag") | $run | $tracked of $frames ($((100 * tracked / frames)) %) | ${node_ms:-?} | ${ate} m | $parents |"
     echo "$line" | tee -a "$report"
   done
 done
