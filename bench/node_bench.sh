@@ -5,9 +5,10 @@
 # once on an idle machine and once beside one busy process (a CPU-bound loop, as another program on a
 # robot). A TUM freiburg1 sequence (tum_fr1_*) becomes the bag TUM published for it: named
 # rgbd_dataset_freiburg1_*.bag, so tum_bag.launch picks freiburg1's calibration from the name, and
-# with the OpenNI driver's default intrinsics in camera_info, as the 2011 bags have. For each run it prints frames processed, the node's ms per frame (conversion, tracking,
-# fusion, publishing), ATE against the ground truth, and whether any frame on /tf had two parents;
-# the offline runner on the same frames gives the reference ATE and ms per frame.
+# with the OpenNI driver's default intrinsics in camera_info, as the 2011 bags have. For each run it
+# prints frames processed, the node's ms per frame (conversion, tracking, fusion, publishing), ATE
+# against the ground truth, and whether any frame on /tf had two parents; the offline runner on the
+# same frames gives the reference ATE and ms per frame.
 #   bash bench/node_bench.sh [SEQUENCE_DIR ...]   (default: fr1_xyz and redkitchen from SDF_TRACKER_DATA)
 #   RUNS="idle busy" picks the runs (default: idle busy rviz); rviz runs with rviz on, under xvfb-run
 #   (installed from Debian when missing), rendering in software on the same cores.

@@ -58,7 +58,7 @@ TEST(Parameters, RulesBetweenParametersAreReportedInTheUsersWords) {
   EXPECT_EQ(compact.validate()[0], "MaxWeight must be at most 255.99609375 with CompactVoxels=true (got 300)");
 }
 
-TEST(Parameters, AGridSizeGivenForTheSparseMapIsAcceptedAndTheUserToldItHasNoEffect) {
+TEST(Parameters, TheDenseGridsSizeAndPlacementGivenForTheSparseMapAreAcceptedAndTheUserToldTheyHaveNoEffect) {
   Settings sparse = preset("default");
   setParameter(&sparse, "GridSizeX", 200);
   setParameter(&sparse, "GridSizeZ", 120);
