@@ -2,13 +2,13 @@
 # The node path at the bag's real rate: each sequence is converted with tum_to_bag into a bag shaped
 # like the TUM RGB-D benchmark's and played with the README's command
 #   roslaunch sdf_tracker tum_bag.launch bag:=... rviz:=false
-# once on an idle machine and once beside one busy process (a CPU-bound loop, as another program on a
-# robot). A TUM freiburg1 sequence (tum_fr1_*) becomes the bag TUM published for it: named
+# on an idle machine, beside one busy process (a CPU-bound loop, as another program on a robot), and
+# with rviz:=true. A TUM freiburg1 sequence (tum_fr1_*) becomes the bag TUM published for it: named
 # rgbd_dataset_freiburg1_*.bag, so tum_bag.launch picks freiburg1's calibration from the name, and
-# with the OpenNI driver's default intrinsics in camera_info, as the 2011 bags have. For each run it
-# prints frames processed, the node's ms per frame (conversion, tracking, fusion, publishing), ATE
-# against the ground truth, and whether any frame on /tf had two parents; the offline runner on the
-# same frames gives the reference ATE and ms per frame.
+# with the OpenNI driver's default intrinsics in camera_info, as the 2011 bags are expected to have
+# (README, "Calibration"). For each run it prints frames processed, the node's ms per frame
+# (conversion, tracking, fusion, publishing), ATE against the ground truth, and whether any frame on
+# /tf had two parents; the offline runner on the same frames gives the reference ATE and ms per frame.
 #   bash bench/node_bench.sh [SEQUENCE_DIR ...]   (default: fr1_xyz and redkitchen from SDF_TRACKER_DATA)
 #   RUNS="idle busy" picks the runs (default: idle busy rviz); rviz runs with rviz on, under xvfb-run
 #   (installed from Debian when missing), rendering in software on the same cores.
@@ -52,7 +52,8 @@ PY
 {
   echo "# The node at the bag's real rate ($(date +%Y-%m-%d))"
   echo
-  echo "\`roslaunch sdf_tracker tum_bag.launch bag:=... rviz:=false\` (default preset, rate 1.0) on $(nproc) cores;"
+  echo "\`roslaunch sdf_tracker tum_bag.launch bag:=... rviz:=false\` (rviz:=true in the \"rviz\" run; default preset,"
+  echo "rate 1.0) on $(nproc) cores;"
   echo "\"busy\": one CPU-bound process running beside it. ms per frame: the node's whole cost of a frame"
   echo "(median). Offline: \`sdf_tracker_offline\` on the same frames (median tracking + fusion). \"rviz\":"
   echo "with rviz on, under xvfb-run (it renders in software on the same cores). fr1 sequences are played"

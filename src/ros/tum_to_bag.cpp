@@ -11,8 +11,9 @@
 //   /camera/rgb/image_color (rgb8) + /camera/rgb/camera_info when the folder has rgb.txt, and
 //   /imu when it has accelerometer.txt ("timestamp ax ay az", m/s^2, in the depth camera's frame).
 // camera_info holds the sequence's intrinsics; with --openni-default-intrinsics it holds what the
-// benchmark's own bags hold instead: the OpenNI driver's default (fx = fy = 525, the image centre,
-// D all zero), which is not the camera's calibration (the node's ~tum_camera gives that).
+// benchmark's own bags are expected to hold instead (inferred from the driver, not checked on one):
+// the OpenNI driver's default (fx = fy = 525, the image centre, D all zero), which is not the
+// camera's calibration (the node's ~tum_camera gives that).
 // The bag is written to a temporary file and renamed when complete: a failure leaves no bag.
 
 #include <cmath>
