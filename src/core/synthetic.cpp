@@ -152,9 +152,46 @@ Primitive onFloor(double x, double z, double half_x, double height, double half_
   return box({x, kFloorY - 0.5 * height, z}, {half_x, 0.5 * height, half_z}, rotation(0.0, yaw, 0.0));
 }
 
+/// One face of a wall, seen from the room or corridor beside it: the face lies in the plane x = at
+/// (along_x false) or z = at (along_x true) and runs from `from` to `to` along the other horizontal
+/// axis; `into_room` is +1 or -1, the side that room is on; doors (centres along the face, 1 m
+/// wide) are kept clear.
+struct WallFace {
+  bool along_x;
+  double at, from, to, into_room;
+  std::vector<double> doors;
+};
+
+/// What lived-in rooms and corridors have on their walls: a picture (4 cm relief) or a shelf
+/// (30 cm deep) every metre, at heights that vary, so that every view of a wall holds edges across
+/// both of its axes. The pattern runs on from one face to the next.
+void addPicturesAndShelves(Scene* scene, const std::vector<WallFace>& faces) {
+  constexpr double kSpacing_m = 1.0;
+  constexpr double kDoorClearance_m = 0.9;
+  int item = 0;
+  for (const WallFace& face : faces) {
+    for (double s = face.from + 0.6; s < face.to - 0.4; s += kSpacing_m, ++item) {
+      const bool by_a_door = std::any_of(face.doors.begin(), face.doors.end(),
+                                         [s](double door) { return std::abs(s - door) < kDoorClearance_m; });
+      if (by_a_door) continue;
+      const bool shelf = item % 3 == 1;
+      const double half_width = shelf ? 0.35 : 0.25;
+      const double half_height = shelf ? 0.02 : 0.18;
+      const double half_depth = shelf ? 0.15 : 0.02;
+      const double centre_y = shelf ? 0.35 + 0.1 * (item % 2) : -0.15 + 0.1 * (item % 4);
+      const double off_wall = face.at + face.into_room * half_depth;
+      if (face.along_x) {
+        scene->add(box({s, centre_y, off_wall}, {half_width, half_height, half_depth}));
+      } else {
+        scene->add(box({off_wall, centre_y, s}, {half_depth, half_height, half_width}));
+      }
+    }
+  }
+}
+
 }  // namespace
 
-Scene Scene::house() {
+Scene Scene::house(HouseWalls walls) {
   Scene scene;
   // Shell: floor, ceiling and the outer walls of x in [0, 12], z in [-4, 6].
   scene.add(box({6.0, kFloorY + 0.05, 1.0}, {6.2, 0.05, 5.2}));
@@ -193,13 +230,30 @@ Scene Scene::house() {
   scene.add(onFloor(7.0, 5.2, 0.8, 0.75, 0.5, 0.1));
   scene.add(onFloor(11.0, 3.0, 0.4, 1.4, 0.4));
   scene.add(sphere({10.0, kFloorY - 0.25, 5.0}, 0.25));
+  if (walls == HouseWalls::kFurnished) {
+    // Both faces of every wall: the outer walls, the rooms' partitions, and the corridor's sides.
+    addPicturesAndShelves(&scene, {{true, -3.95, 0.0, 12.0, 1.0, {}},
+                                   {true, 5.95, 0.0, 12.0, -1.0, {}},
+                                   {false, 0.05, -4.0, 6.0, 1.0, {}},
+                                   {false, 11.95, -4.0, 6.0, -1.0, {}},
+                                   {false, 3.95, -4.0, 0.0, -1.0, {}},
+                                   {false, 4.05, -4.0, 0.0, 1.0, {}},
+                                   {false, 7.95, -4.0, 0.0, -1.0, {}},
+                                   {false, 8.05, -4.0, 0.0, 1.0, {}},
+                                   {true, -0.05, 0.0, 12.0, -1.0, {2.0, 6.0, 10.0}},
+                                   {true, 0.05, 0.0, 12.0, 1.0, {2.0, 6.0, 10.0}},
+                                   {true, 1.95, 0.0, 12.0, -1.0, {3.0, 9.0}},
+                                   {true, 2.05, 0.0, 12.0, 1.0, {3.0, 9.0}},
+                                   {false, 5.95, 2.0, 6.0, -1.0, {}},
+                                   {false, 6.05, 2.0, 6.0, 1.0, {}}});
+  }
   return scene;
 }
 
-Scene Scene::forMotion(Motion motion) {
+Scene Scene::forMotion(Motion motion, HouseWalls walls) {
   switch (motion) {
     case Motion::kPlanar: return singleWall();
-    case Motion::kWalk: return house();
+    case Motion::kWalk: return house(walls);
     default: return indoorRoom();
   }
 }
@@ -383,11 +437,13 @@ void writeSequence(const std::string& directory, const SequenceSpec& spec) {
                                 ", " + std::to_string(spec.rate_hz) + ")");
   }
   io::makeDirectories(directory + "/depth");
-  const Scene scene = Scene::forMotion(spec.motion);
+  const Scene scene = Scene::forMotion(spec.motion, spec.house_walls);
   const double duration = spec.frames / spec.rate_hz;
   std::ostringstream depth_list, ground_truth, intrinsics;
   depth_list << "# synthetic depth (sdf_tracker), motion " << toString(spec.motion) << ", noise "
-             << (spec.noise.enabled ? "on" : "off") << ", seed " << spec.seed << "\n# timestamp filename\n";
+             << (spec.noise.enabled ? "on" : "off") << ", seed " << spec.seed
+             << (spec.motion == Motion::kWalk && spec.house_walls == HouseWalls::kBare ? ", bare walls" : "")
+             << "\n# timestamp filename\n";
   ground_truth << "# exact ground truth, camera to world\n# timestamp tx ty tz qx qy qz qw\n";
   std::vector<io::StampedPose> poses;
   for (int i = 0; i < spec.frames; ++i) {

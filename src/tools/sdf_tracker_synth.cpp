@@ -15,6 +15,9 @@ Renders an analytic indoor scene along a scripted camera path, in TUM layout
 
   --output DIR       folder to write (created)
   --motion NAME      desk (default) | slow | fast | planar | loop | walk (through a house, 0.5 m/s)
+  --bare-walls       walk only: bare walls, but for six pictures in the corridor (default: a picture
+                     or a shelf every metre of every wall); close to a bare wall the view holds one
+                     plane, which depth alone cannot place
   --frames N         number of frames (default 300, at 30 Hz)
   --seed N           noise seed (default 1)
   --size WxH         image size: 640x480 (default), 320x240 or 160x120 (freiburg1 intrinsics, scaled)
@@ -25,7 +28,7 @@ Renders an analytic indoor scene along a scripted camera path, in TUM layout
 
 int run(int argc, char** argv) {
   using namespace sdf_tracker;
-  const tools::CommandLine args(argc, argv, {"output", "motion", "frames", "seed", "size", "disparity-subpixels", "noise-scale"}, {"no-noise", "help"});
+  const tools::CommandLine args(argc, argv, {"output", "motion", "frames", "seed", "size", "disparity-subpixels", "noise-scale"}, {"no-noise", "bare-walls", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
     return 0;
@@ -34,6 +37,13 @@ int run(int argc, char** argv) {
   spec.motion = synthetic::parseMotion(args.get("motion", "desk"));
   spec.frames = args.getInt("frames", 300);
   spec.seed = static_cast<uint32_t>(args.getInt("seed", 1));
+  if (args.has("bare-walls")) {
+    if (spec.motion != synthetic::Motion::kWalk) {
+      throw std::invalid_argument("--bare-walls: only the walk's house has rooms (got --motion " +
+                                  synthetic::toString(spec.motion) + ")");
+    }
+    spec.house_walls = synthetic::HouseWalls::kBare;
+  }
   if (args.has("size")) {
     const std::string size = args.get("size");
     const size_t x = size.find('x');

@@ -40,6 +40,13 @@ struct NoiseModel {
 
 enum class Motion;
 
+/// What the house has on its walls.
+enum class HouseWalls {
+  kFurnished,  ///< a picture or a shelf every metre, as in a lived-in flat
+  kBare,       ///< bare but for six pictures in the corridor: close to a wall the view holds one plane,
+               ///< which depth alone cannot place
+};
+
 class Scene {
  public:
   /// A room with a desk, objects on it, a cabinet and a slanted panel: every axis constrained.
@@ -47,10 +54,11 @@ class Scene {
   /// One large wall and nothing else: three degrees of freedom unconstrained.
   static Scene singleWall();
   /// A 12 m x 10 m flat: a 2 m wide corridor along x with three rooms on one side and two on the
-  /// other, doors, furniture, and pictures on the corridor's walls.
-  static Scene house();
-  /// The scene a path is made for.
-  static Scene forMotion(Motion motion);
+  /// other, doors, furniture, and pictures on the corridor's walls; `walls` says what else the
+  /// walls carry.
+  static Scene house(HouseWalls walls = HouseWalls::kFurnished);
+  /// The scene a path is made for (`walls`: the house's, for the walk).
+  static Scene forMotion(Motion motion, HouseWalls walls = HouseWalls::kFurnished);
 
   void add(const Primitive& p) { primitives_.push_back(p); }
 
@@ -88,6 +96,7 @@ struct SequenceSpec {
   double rate_hz = 30.0;
   NoiseModel noise;
   uint32_t seed = 1;
+  HouseWalls house_walls = HouseWalls::kFurnished;  ///< the walk's house
   PinholeCamera camera = PinholeCamera::tumFreiburg1();
   double depth_factor = 5000.0;
 };
