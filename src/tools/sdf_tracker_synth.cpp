@@ -39,7 +39,7 @@ int run(int argc, char** argv) {
   spec.seed = static_cast<uint32_t>(args.getInt("seed", 1));
   if (args.has("bare-walls")) {
     if (spec.motion != synthetic::Motion::kWalk) {
-      throw std::invalid_argument("--bare-walls: only the walk's house has rooms (got --motion " +
+      throw std::invalid_argument("--bare-walls: only the walk goes through the house (got --motion " +
                                   synthetic::toString(spec.motion) + ")");
     }
     spec.house_walls = synthetic::HouseWalls::kBare;

@@ -42,7 +42,7 @@ enum class Motion;
 
 /// What the house has on its walls.
 enum class HouseWalls {
-  kFurnished,  ///< a picture or a shelf every metre, as in a lived-in flat
+  kFurnished,  ///< a picture or a shelf every metre of every wall, as in a lived-in flat
   kBare,       ///< bare but for six pictures in the corridor: close to a wall the view holds one plane,
                ///< which depth alone cannot place
 };
@@ -96,7 +96,7 @@ struct SequenceSpec {
   double rate_hz = 30.0;
   NoiseModel noise;
   uint32_t seed = 1;
-  HouseWalls house_walls = HouseWalls::kFurnished;  ///< the walk's house
+  HouseWalls house_walls = HouseWalls::kFurnished;  ///< what the walk's house has on its walls
   PinholeCamera camera = PinholeCamera::tumFreiburg1();
   double depth_factor = 5000.0;
 };
