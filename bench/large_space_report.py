@@ -15,6 +15,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 BIN_M = 5.0
+WALK_RUNS = ("sparse", "sparse_48mb", "dense")  # the bench's walk: tabled and plotted against its path
+BARE_WALLS_RUN = "sparse_bare_walls"  # the same path through the house with bare walls: tabled only
 
 
 def read_ground_truth(path):
@@ -56,15 +58,15 @@ def main(walk, work, report):
              "The dense grid is the default 256^3 cube of 2 cm (5.1 m), placed around the start." % (len(stamps), total_m),
              "", "Runs: `sparse` (MapType=sparse), `sparse_48mb` (the same with MaxMemoryMB=48: blocks away from "
              "the camera swapped to disk and read back when seen again), `dense` (the default grid), and "
-             "`sparse_bare_walls` (the same walk with bare walls, but for six pictures in the corridor: close to a wall the view holds one "
-             "plane, which depth cannot place). Peak resident memory includes the whole-map mesh and cloud written at "
-             "the end.",
+             "`%s` (the same walk with bare walls, but for six pictures in the corridor: close to a wall the "
+             "view holds one plane, which depth cannot place). Peak resident memory includes the whole-map mesh and "
+             "cloud written at the end." % BARE_WALLS_RUN,
              "", "| run | frames tracked | failed | ATE RMSE | ATE max | median ms/frame | p95 | map MiB in memory at the end "
              "| swapped to disk MiB | peak resident MiB |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     fig, (ax_ms, ax_mb) = plt.subplots(1, 2, figsize=(11, 4))
     binned = {}
-    for map_type in ("sparse", "sparse_48mb", "dense", "sparse_bare_walls"):
+    for map_type in WALK_RUNS + (BARE_WALLS_RUN,):
         summary_path = os.path.join(work, map_type, "summary.json")
         if not os.path.exists(summary_path):
             lines.append("| %s | run failed: see %s.log | | | | | | | | |" % (map_type, map_type))
@@ -78,8 +80,8 @@ def main(walk, work, report):
             map_type, tracked, s["frames"], s["failed_frames"], 100 * ate.get("rmse", float("nan")),
             100 * ate.get("max", float("nan")), s["ms"]["frame_median"], s["ms"]["frame_p95"],
             float(rows[-1]["map_mb"]), s.get("swapped_mb", 0.0), s["peak_rss_mb"]))
-        if map_type == "sparse_bare_walls":
-            continue  # another scene: the table only
+        if map_type not in WALK_RUNS:
+            continue
         bins = {}
         for r in rows[1:]:
             length = length_of.get("%.6f" % float(r["timestamp"]))

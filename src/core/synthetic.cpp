@@ -127,24 +127,34 @@ constexpr double kCeilingY = -1.2;
 constexpr double kWallHalfThickness = 0.05;
 constexpr double kDoorTopY = kFloorY - 2.0;
 
-/// A piece of wall in the plane x = const from z0 to z1, between heights y0 and y1 (y0 < y1).
-Primitive wallAlongZ(double x, double z0, double z1, double y0 = kCeilingY, double y1 = kFloorY) {
-  return box({x, 0.5 * (y0 + y1), 0.5 * (z0 + z1)}, {kWallHalfThickness, 0.5 * (y1 - y0), 0.5 * (z1 - z0)});
-}
-Primitive wallAlongX(double z, double x0, double x1, double y0 = kCeilingY, double y1 = kFloorY) {
-  return box({0.5 * (x0 + x1), 0.5 * (y0 + y1), z}, {0.5 * (x1 - x0), 0.5 * (y1 - y0), kWallHalfThickness});
+/// A wall from floor to ceiling: in the plane z = at (along_x) or x = at (otherwise), running
+/// from `from` to `to` along the other horizontal axis, with 1 m wide doors centred at `doors`.
+struct Wall {
+  bool along_x;
+  double at, from, to;
+  std::vector<double> doors;
+};
+
+/// The house's shell: x in [0, 12], z in [-4, 6].
+constexpr double kHouseMinX = 0.0, kHouseMaxX = 12.0, kHouseMinZ = -4.0, kHouseMaxZ = 6.0;
+
+/// The piece of `wall` from a to b along it, between heights y0 and y1 (y0 < y1).
+Primitive wallPiece(const Wall& wall, double a, double b, double y0 = kCeilingY, double y1 = kFloorY) {
+  if (wall.along_x) {
+    return box({0.5 * (a + b), 0.5 * (y0 + y1), wall.at}, {0.5 * (b - a), 0.5 * (y1 - y0), kWallHalfThickness});
+  }
+  return box({wall.at, 0.5 * (y0 + y1), 0.5 * (a + b)}, {kWallHalfThickness, 0.5 * (y1 - y0), 0.5 * (b - a)});
 }
 
-/// A wall in the plane z = const from x0 to x1 with 1 m wide doors centred at door_x: the pieces
-/// between the doors, and a lintel above each door.
-void addWallWithDoors(Scene* scene, double z, double x0, double x1, const std::vector<double>& door_x) {
-  double from = x0;
-  for (double door : door_x) {
-    scene->add(wallAlongX(z, from, door - 0.5));
-    scene->add(wallAlongX(z, door - 0.5, door + 0.5, kCeilingY, kDoorTopY));
+/// The pieces of `wall` between its doors, and a lintel above each door.
+void addWall(Scene* scene, const Wall& wall) {
+  double from = wall.from;
+  for (double door : wall.doors) {
+    scene->add(wallPiece(wall, from, door - 0.5));
+    scene->add(wallPiece(wall, door - 0.5, door + 0.5, kCeilingY, kDoorTopY));
     from = door + 0.5;
   }
-  scene->add(wallAlongX(z, from, x1));
+  scene->add(wallPiece(wall, from, wall.to));
 }
 
 /// A box standing on the floor at (x, z), turned by yaw about the vertical.
@@ -152,38 +162,35 @@ Primitive onFloor(double x, double z, double half_x, double height, double half_
   return box({x, kFloorY - 0.5 * height, z}, {half_x, 0.5 * height, half_z}, rotation(0.0, yaw, 0.0));
 }
 
-/// One face of a wall, seen from the room or corridor beside it: the face lies in the plane x = at
-/// (along_x false) or z = at (along_x true) and runs from `from` to `to` along the other horizontal
-/// axis; `into_room` is +1 or -1, the side that room is on; doors (centres along the face, 1 m
-/// wide) are kept clear.
-struct WallFace {
-  bool along_x;
-  double at, from, to, into_room;
-  std::vector<double> doors;
-};
-
 /// What lived-in rooms and corridors have on their walls: a picture (4 cm relief) or a shelf
-/// (30 cm deep) every metre, at heights that vary, so that every view of a wall holds edges across
-/// both of its axes. The pattern runs on from one face to the next.
-void addPicturesAndShelves(Scene* scene, const std::vector<WallFace>& faces) {
+/// (30 cm deep) every metre of each face inside the house, at heights that vary, so that every
+/// view of a wall holds edges across both of its axes; doors are kept clear. The pattern runs on
+/// from one face to the next.
+void addPicturesAndShelves(Scene* scene, const std::vector<Wall>& walls) {
   constexpr double kSpacing_m = 1.0;
   constexpr double kDoorClearance_m = 0.9;
   int item = 0;
-  for (const WallFace& face : faces) {
-    for (double s = face.from + 0.6; s < face.to - 0.4; s += kSpacing_m, ++item) {
-      const bool by_a_door = std::any_of(face.doors.begin(), face.doors.end(),
-                                         [s](double door) { return std::abs(s - door) < kDoorClearance_m; });
-      if (by_a_door) continue;
-      const bool shelf = item % 3 == 1;
-      const double half_width = shelf ? 0.35 : 0.25;
-      const double half_height = shelf ? 0.02 : 0.18;
-      const double half_depth = shelf ? 0.15 : 0.02;
-      const double centre_y = shelf ? 0.35 + 0.1 * (item % 2) : -0.15 + 0.1 * (item % 4);
-      const double off_wall = face.at + face.into_room * half_depth;
-      if (face.along_x) {
-        scene->add(box({s, centre_y, off_wall}, {half_width, half_height, half_depth}));
-      } else {
-        scene->add(box({off_wall, centre_y, s}, {half_depth, half_height, half_width}));
+  for (const Wall& wall : walls) {
+    for (double side : {-1.0, 1.0}) {
+      const double face = wall.at + side * kWallHalfThickness;
+      const bool inside_the_shell =
+          wall.along_x ? kHouseMinZ < face && face < kHouseMaxZ : kHouseMinX < face && face < kHouseMaxX;
+      if (!inside_the_shell) continue;
+      for (double s = wall.from + 0.6; s < wall.to - 0.4; s += kSpacing_m, ++item) {
+        const bool by_a_door = std::any_of(wall.doors.begin(), wall.doors.end(),
+                                           [s](double door) { return std::abs(s - door) < kDoorClearance_m; });
+        if (by_a_door) continue;
+        const bool shelf = item % 3 == 1;
+        const double half_width = shelf ? 0.35 : 0.25;
+        const double half_height = shelf ? 0.02 : 0.18;
+        const double half_depth = shelf ? 0.15 : 0.02;
+        const double centre_y = shelf ? 0.35 + 0.1 * (item % 2) : -0.15 + 0.1 * (item % 4);
+        const double off_wall = face + side * half_depth;
+        if (wall.along_x) {
+          scene->add(box({s, centre_y, off_wall}, {half_width, half_height, half_depth}));
+        } else {
+          scene->add(box({off_wall, centre_y, s}, {half_depth, half_height, half_width}));
+        }
       }
     }
   }
@@ -193,20 +200,20 @@ void addPicturesAndShelves(Scene* scene, const std::vector<WallFace>& faces) {
 
 Scene Scene::house(HouseWalls walls) {
   Scene scene;
-  // Shell: floor, ceiling and the outer walls of x in [0, 12], z in [-4, 6].
+  // Floor and ceiling over the whole house; the shell; the corridor z in [0, 2]; rooms south
+  // (z < 0) at x in [0, 4], [4, 8], [8, 12] and north (z > 2) at x in [0, 6], [6, 12].
   scene.add(box({6.0, kFloorY + 0.05, 1.0}, {6.2, 0.05, 5.2}));
   scene.add(box({6.0, kCeilingY - 0.05, 1.0}, {6.2, 0.05, 5.2}));
-  scene.add(wallAlongZ(0.0, -4.0, 6.0));
-  scene.add(wallAlongZ(12.0, -4.0, 6.0));
-  scene.add(wallAlongX(-4.0, 0.0, 12.0));
-  scene.add(wallAlongX(6.0, 0.0, 12.0));
-  // The corridor z in [0, 2]; rooms south (z < 0) at x in [0, 4], [4, 8], [8, 12] and north
-  // (z > 2) at x in [0, 6], [6, 12].
-  addWallWithDoors(&scene, 0.0, 0.0, 12.0, {2.0, 6.0, 10.0});
-  addWallWithDoors(&scene, 2.0, 0.0, 12.0, {3.0, 9.0});
-  scene.add(wallAlongZ(4.0, -4.0, 0.0));
-  scene.add(wallAlongZ(8.0, -4.0, 0.0));
-  scene.add(wallAlongZ(6.0, 2.0, 6.0));
+  const std::vector<Wall> house_walls = {{true, kHouseMinZ, kHouseMinX, kHouseMaxX, {}},
+                                         {true, kHouseMaxZ, kHouseMinX, kHouseMaxX, {}},
+                                         {false, kHouseMinX, kHouseMinZ, kHouseMaxZ, {}},
+                                         {false, kHouseMaxX, kHouseMinZ, kHouseMaxZ, {}},
+                                         {false, 4.0, kHouseMinZ, 0.0, {}},
+                                         {false, 8.0, kHouseMinZ, 0.0, {}},
+                                         {true, 0.0, kHouseMinX, kHouseMaxX, {2.0, 6.0, 10.0}},
+                                         {true, 2.0, kHouseMinX, kHouseMaxX, {3.0, 9.0}},
+                                         {false, 6.0, 2.0, kHouseMaxZ, {}}};
+  for (const Wall& wall : house_walls) addWall(&scene, wall);
   // Corridor: cabinets against the walls and pictures at eye height, so that its length is seen.
   scene.add(onFloor(4.5, 1.75, 0.3, 1.0, 0.2));
   scene.add(onFloor(7.5, 0.25, 0.4, 0.9, 0.2));
@@ -230,23 +237,7 @@ Scene Scene::house(HouseWalls walls) {
   scene.add(onFloor(7.0, 5.2, 0.8, 0.75, 0.5, 0.1));
   scene.add(onFloor(11.0, 3.0, 0.4, 1.4, 0.4));
   scene.add(sphere({10.0, kFloorY - 0.25, 5.0}, 0.25));
-  if (walls == HouseWalls::kFurnished) {
-    // Both faces of every wall: the outer walls, the rooms' partitions, and the corridor's sides.
-    addPicturesAndShelves(&scene, {{true, -3.95, 0.0, 12.0, 1.0, {}},
-                                   {true, 5.95, 0.0, 12.0, -1.0, {}},
-                                   {false, 0.05, -4.0, 6.0, 1.0, {}},
-                                   {false, 11.95, -4.0, 6.0, -1.0, {}},
-                                   {false, 3.95, -4.0, 0.0, -1.0, {}},
-                                   {false, 4.05, -4.0, 0.0, 1.0, {}},
-                                   {false, 7.95, -4.0, 0.0, -1.0, {}},
-                                   {false, 8.05, -4.0, 0.0, 1.0, {}},
-                                   {true, -0.05, 0.0, 12.0, -1.0, {2.0, 6.0, 10.0}},
-                                   {true, 0.05, 0.0, 12.0, 1.0, {2.0, 6.0, 10.0}},
-                                   {true, 1.95, 0.0, 12.0, -1.0, {3.0, 9.0}},
-                                   {true, 2.05, 0.0, 12.0, 1.0, {3.0, 9.0}},
-                                   {false, 5.95, 2.0, 6.0, -1.0, {}},
-                                   {false, 6.05, 2.0, 6.0, 1.0, {}}});
-  }
+  if (walls == HouseWalls::kFurnished) addPicturesAndShelves(&scene, house_walls);
   return scene;
 }
 

@@ -541,7 +541,8 @@ TEST(HouseWalk, PicturesAndShelvesOnTheWallsGiveTheTrackerAllSixDirectionsWhereA
   EXPECT_EQ(furnished.constrained_rank, 6);
   EXPECT_LT((furnished.T_W_C.translation() - T_W_C.translation()).norm(), 0.005) << "from a guess 1 cm off";
   std::cout << "inverse condition at 65 s: bare walls " << bare.inverse_condition << " (rank "
-            << bare.constrained_rank << "), furnished " << furnished.inverse_condition << " (rank 6)\n";
+            << bare.constrained_rank << "), furnished " << furnished.inverse_condition << " (rank "
+            << furnished.constrained_rank << ")\n";
 }
 
 TEST(BlockSwap, GivesBlocksBackExactlyAndReusesTheRecordsOfThoseTaken) {
