@@ -66,4 +66,4 @@ if [ -f "$xyz/trajectory.txt" ]; then
   done
 fi
 
-/usr/bin/python3 "$repo/bench/accuracy_report.py" "$work" "$results"
+/usr/bin/python3 "$repo/bench/report/accuracy.py" "$work" "$results"

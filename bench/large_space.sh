@@ -43,5 +43,5 @@ for run in sparse sparse_48mb dense sparse_true_poses sparse_bare_walls; do
     > "$work/$run.log" 2>&1 || echo "  failed: see $work/$run.log"
 done
 report="$results/$(date +%Y-%m-%d)_large_space.md"
-/usr/bin/python3 "$repo/bench/large_space_report.py" "$walk" "$work" "$report"
+/usr/bin/python3 "$repo/bench/report/large_space.py" "$walk" "$work" "$report"
 echo "wrote $report"

@@ -63,4 +63,4 @@ if [ -f "$redkitchen/depth.txt" ]; then
     --param GridSizeX=512 --param GridSizeY=512 --param GridSizeZ=512
 fi
 
-/usr/bin/python3 "$repo/bench/report.py" "$work/runs" "$results"
+/usr/bin/python3 "$repo/bench/report/run_bench.py" "$work/runs" "$results"

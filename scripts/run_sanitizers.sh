@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# The core's unit tests (test_core, test_tools) once under AddressSanitizer + UndefinedBehavior-
-# Sanitizer, then every reader's fuzz target for FUZZ_SECONDS (default 30) from its committed
-# corpus (test/fuzz/corpus/). Builds in build/sanitize (plain CMake, no ROS). Results go to
+# The core's unit tests (test_core: test/unit/) and the tools' tests (test_tools: test/tools/) once
+# more under AddressSanitizer + UndefinedBehaviorSanitizer, then every reader's fuzz target for
+# FUZZ_SECONDS (default 30) from its committed corpus (test/fuzz/corpus/). Whole sequences
+# (test/sequences/) run in the release build only: their code is the unit tests' code, over more
+# frames. Builds in build/sanitize (plain CMake, no ROS). Results go to
 # RESULTS_DIR (default build/sanitize/results) as JUnit XML, which run_tests.sh counts.
 #   scripts/run_sanitizers.sh
 set -euo pipefail
@@ -23,7 +25,8 @@ junit() {  # junit NAME PASSED(0/1) MESSAGE
 }
 
 if ! { cmake -S "$repo/test/sanitize" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo > "$build/cmake.log" 2>&1 &&
-       cmake --build "$build" -j"$(nproc)" > "$build/build.log" 2>&1; }; then
+       cmake --build "$build" -j"$(nproc)" --target test_core test_tools fuzz_depth_png fuzz_vti fuzz_sdfmap fuzz_ply \
+         fuzz_tum_folder > "$build/build.log" 2>&1; }; then
   tail -n 30 "$build/build.log" 2>/dev/null || tail -n 30 "$build/cmake.log"
   junit sanitizer_build 0 "the sanitizer build failed (build/sanitize/build.log)"
   exit 1

@@ -4,7 +4,7 @@
 #include <fstream>
 #include <stdexcept>
 
-#include "sdf_tracker/core/tum_sequence.h"
+#include "sdf_tracker/io/tum_sequence.h"
 
 namespace sdf_tracker::devices {
 

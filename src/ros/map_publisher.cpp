@@ -11,10 +11,10 @@
 #include <omp.h>
 #endif
 
-#include "sdf_tracker/core/sparse_tsdf_map.h"
-#include "sdf_tracker/core/surface.h"
-#include "sdf_tracker/core/tsdf_volume.h"
+#include "sdf_tracker/map/sparse_tsdf_map.h"
+#include "sdf_tracker/map/tsdf_volume.h"
 #include "sdf_tracker/ros/conversions.h"
+#include "sdf_tracker/surface/surface.h"
 
 namespace sdf_tracker_ros {
 

@@ -3,9 +3,13 @@
 #include <filesystem>
 #include <sstream>
 
-#include "sdf_tracker/core/se3.h"
-#include "sdf_tracker/core/sparse_tsdf_map.h"
-#include "sdf_tracker/core/surface.h"
+#include "sdf_tracker/io/files.h"
+#include "sdf_tracker/io/map_file.h"
+#include "sdf_tracker/io/mesh_file.h"
+#include "sdf_tracker/io/vti_file.h"
+#include "sdf_tracker/map/sparse_tsdf_map.h"
+#include "sdf_tracker/surface/surface.h"
+#include "sdf_tracker/util/se3.h"
 
 namespace sdf_tracker_ros {
 

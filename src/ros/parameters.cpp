@@ -4,8 +4,8 @@
 #include <map>
 #include <stdexcept>
 
-#include "sdf_tracker/core/validation.h"
 #include "sdf_tracker/ros/conversions.h"
+#include "sdf_tracker/util/validation.h"
 
 namespace sdf_tracker_ros {
 

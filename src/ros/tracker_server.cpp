@@ -9,9 +9,10 @@
 #include <topic_tools/shape_shifter.h>
 
 #include "sdf_tracker/TrackingStatus.h"
-#include "sdf_tracker/core/raycaster.h"
-#include "sdf_tracker/core/validation.h"
+#include "sdf_tracker/io/map_file.h"
 #include "sdf_tracker/ros/conversions.h"
+#include "sdf_tracker/surface/raycaster.h"
+#include "sdf_tracker/util/validation.h"
 
 namespace sdf_tracker_ros {
 

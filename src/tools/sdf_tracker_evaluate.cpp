@@ -4,9 +4,10 @@
 #include <iostream>
 #include <sstream>
 
-#include "command_line.h"
-#include "report.h"
-#include "sdf_tracker/core/io.h"
+#include "sdf_tracker/cli/command_line.h"
+#include "sdf_tracker/cli/report.h"
+#include "sdf_tracker/io/files.h"
+#include "sdf_tracker/io/trajectory_file.h"
 
 namespace {
 

@@ -17,18 +17,22 @@
 #include <omp.h>
 #endif
 
-#include "command_line.h"
-#include "output_folder.h"
-#include "report.h"
-#include "sdf_tracker/core/frame_memory.h"
-#include "sdf_tracker/core/io.h"
-#include "sdf_tracker/core/parameters.h"
-#include "sdf_tracker/core/pipeline.h"
-#include "sdf_tracker/core/raycaster.h"
-#include "sdf_tracker/core/sparse_tsdf_map.h"
-#include "sdf_tracker/core/surface.h"
-#include "sdf_tracker/core/tum_sequence.h"
-#include "sdf_tracker/core/validation.h"
+#include "sdf_tracker/cli/command_line.h"
+#include "sdf_tracker/cli/output_folder.h"
+#include "sdf_tracker/cli/report.h"
+#include "sdf_tracker/io/files.h"
+#include "sdf_tracker/io/map_file.h"
+#include "sdf_tracker/io/mesh_file.h"
+#include "sdf_tracker/io/trajectory_file.h"
+#include "sdf_tracker/io/tum_sequence.h"
+#include "sdf_tracker/io/vti_file.h"
+#include "sdf_tracker/map/sparse_tsdf_map.h"
+#include "sdf_tracker/pipeline/parameters.h"
+#include "sdf_tracker/pipeline/pipeline.h"
+#include "sdf_tracker/surface/raycaster.h"
+#include "sdf_tracker/surface/surface.h"
+#include "sdf_tracker/util/frame_memory.h"
+#include "sdf_tracker/util/validation.h"
 
 namespace st = sdf_tracker;
 

@@ -2,9 +2,9 @@
 
 #include <iostream>
 
-#include "command_line.h"
-#include "sdf_tracker/core/parameters.h"
-#include "sdf_tracker/core/synthetic.h"
+#include "sdf_tracker/cli/command_line.h"
+#include "sdf_tracker/pipeline/parameters.h"
+#include "sdf_tracker/sim/synthetic.h"
 
 namespace {
 

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <iostream>
 
-#include "command_line.h"
+#include "sdf_tracker/cli/command_line.h"
 #include "sdf_tracker/devices/fakenect_dump.h"
 #include "sdf_tracker/devices/kinect_disparity.h"
 #include "sdf_tracker/devices/recording.h"

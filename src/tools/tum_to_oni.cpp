@@ -6,7 +6,7 @@
 #include <cmath>
 #include <iostream>
 
-#include "command_line.h"
+#include "sdf_tracker/cli/command_line.h"
 #include "sdf_tracker/devices/oni_file.h"
 #include "sdf_tracker/devices/recording.h"
 

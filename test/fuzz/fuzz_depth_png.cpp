@@ -3,7 +3,7 @@
 #include <stdexcept>
 
 #include "fuzz_input.h"
-#include "sdf_tracker/core/io.h"
+#include "sdf_tracker/io/depth_png.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path = sdf_tracker::fuzz::writeInput(data, size, "depth.png");

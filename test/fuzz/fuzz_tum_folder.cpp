@@ -8,8 +8,9 @@
 #include <stdexcept>
 
 #include "fuzz_input.h"
-#include "sdf_tracker/core/io.h"
-#include "sdf_tracker/core/tum_sequence.h"
+#include "sdf_tracker/io/depth_png.h"
+#include "sdf_tracker/io/files.h"
+#include "sdf_tracker/io/tum_sequence.h"
 
 namespace {
 

@@ -2,7 +2,7 @@
 #include <stdexcept>
 
 #include "fuzz_input.h"
-#include "sdf_tracker/core/io.h"
+#include "sdf_tracker/io/vti_file.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path = sdf_tracker::fuzz::writeInput(data, size, "volume.vti");

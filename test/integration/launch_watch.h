@@ -15,11 +15,11 @@
 #include <ros/ros.h>
 #include <tf2_msgs/TFMessage.h>
 
-#include "sdf_tracker/core/evaluation.h"
-#include "sdf_tracker/core/parameters.h"
-#include "sdf_tracker/core/pipeline.h"
-#include "sdf_tracker/core/tum_sequence.h"
 #include "sdf_tracker/devices/recording.h"
+#include "sdf_tracker/eval/evaluation.h"
+#include "sdf_tracker/io/tum_sequence.h"
+#include "sdf_tracker/pipeline/parameters.h"
+#include "sdf_tracker/pipeline/pipeline.h"
 #include "sdf_tracker/ros/conversions.h"
 #include "sdf_tracker/ros/parameters.h"
 

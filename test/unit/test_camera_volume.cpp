@@ -3,9 +3,9 @@
 #include <cmath>
 #include <utility>
 
-#include "sdf_tracker/core/camera.h"
-#include "sdf_tracker/core/depth_undistortion.h"
-#include "sdf_tracker/core/tsdf_volume.h"
+#include "sdf_tracker/camera/camera.h"
+#include "sdf_tracker/camera/depth_undistortion.h"
+#include "sdf_tracker/map/tsdf_volume.h"
 #include "test_helpers.h"
 
 namespace sdf_tracker {
@@ -55,7 +55,7 @@ PinholeCamera distortedCamera() {
 
 TEST(LensDistortion, UndistortInvertsDistortAcrossTheImage) {
   const PinholeCamera camera = distortedCamera();
-  for (const Eigen::Vector2d pixel : {Eigen::Vector2d(0, 0), Eigen::Vector2d(639, 479), Eigen::Vector2d(320, 10),
+  for (const Eigen::Vector2d& pixel : {Eigen::Vector2d(0, 0), Eigen::Vector2d(639, 479), Eigen::Vector2d(320, 10),
                                       Eigen::Vector2d(318.6, 255.3), Eigen::Vector2d(5, 400)}) {
     const Eigen::Vector2d seen((pixel.x() - camera.cx) / camera.fx, (pixel.y() - camera.cy) / camera.fy);
     const Eigen::Vector2d ideal = camera.distortion.undistort(seen);

@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "sdf_tracker/core/evaluation.h"
+#include "sdf_tracker/eval/evaluation.h"
 #include "test_helpers.h"
 
 namespace sdf_tracker {

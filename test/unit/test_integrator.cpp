@@ -3,8 +3,8 @@
 #include <cmath>
 #include <limits>
 
-#include "sdf_tracker/core/integrator.h"
-#include "sdf_tracker/core/synthetic.h"
+#include "sdf_tracker/fusion/integrator.h"
+#include "sdf_tracker/sim/synthetic.h"
 #include "test_helpers.h"
 
 namespace sdf_tracker {

@@ -10,9 +10,15 @@
 #include <iostream>
 #include <iterator>
 
-#include "sdf_tracker/core/io.h"
-#include "sdf_tracker/core/surface.h"
-#include "sdf_tracker/core/tum_sequence.h"
+#include "sdf_tracker/io/depth_png.h"
+#include "sdf_tracker/io/files.h"
+#include "sdf_tracker/io/map_file.h"
+#include "sdf_tracker/io/mesh_file.h"
+#include "sdf_tracker/io/sdfmap_file.h"
+#include "sdf_tracker/io/trajectory_file.h"
+#include "sdf_tracker/io/tum_sequence.h"
+#include "sdf_tracker/io/vti_file.h"
+#include "sdf_tracker/surface/surface.h"
 #include "test_helpers.h"
 
 namespace sdf_tracker {

@@ -1,7 +1,7 @@
 #include <gtest/gtest.h>
 
-#include "sdf_tracker/core/parameters.h"
-#include "sdf_tracker/core/pipeline.h"
+#include "sdf_tracker/pipeline/parameters.h"
+#include "sdf_tracker/pipeline/pipeline.h"
 #include "test_helpers.h"
 
 namespace sdf_tracker {

@@ -10,12 +10,12 @@
 #include <cstring>
 #include <iostream>
 
-#include "sdf_tracker/core/frame_memory.h"
-#include "sdf_tracker/core/motion_model.h"
-#include "sdf_tracker/core/parameters.h"
-#include "sdf_tracker/core/pipeline.h"
-#include "sdf_tracker/core/se3.h"
-#include "sdf_tracker/core/synthetic.h"
+#include "sdf_tracker/pipeline/parameters.h"
+#include "sdf_tracker/pipeline/pipeline.h"
+#include "sdf_tracker/sim/synthetic.h"
+#include "sdf_tracker/tracking/motion_model.h"
+#include "sdf_tracker/util/frame_memory.h"
+#include "sdf_tracker/util/se3.h"
 #include "test_helpers.h"
 
 namespace sdf_tracker {

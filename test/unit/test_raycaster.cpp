@@ -4,7 +4,7 @@
 #include <cmath>
 #include <vector>
 
-#include "sdf_tracker/core/raycaster.h"
+#include "sdf_tracker/surface/raycaster.h"
 #include "test_helpers.h"
 
 namespace sdf_tracker {

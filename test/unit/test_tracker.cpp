@@ -7,8 +7,8 @@
 #include <omp.h>
 #endif
 
-#include "sdf_tracker/core/se3.h"
-#include "sdf_tracker/core/tracker.h"
+#include "sdf_tracker/tracking/tracker.h"
+#include "sdf_tracker/util/se3.h"
 #include "test_helpers.h"
 
 namespace sdf_tracker {

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "sdf_tracker/core/camera.h"
+#include "sdf_tracker/camera/camera.h"
 
 namespace sdf_tracker::devices {
 

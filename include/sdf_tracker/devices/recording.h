@@ -2,7 +2,7 @@
 
 #include <string>
 
-#include "sdf_tracker/core/camera.h"
+#include "sdf_tracker/camera/camera.h"
 
 namespace sdf_tracker {
 class TumSequence;

@@ -7,9 +7,9 @@
 #include <sensor_msgs/Image.h>
 #include <visualization_msgs/Marker.h>
 
-#include "sdf_tracker/core/camera.h"
-#include "sdf_tracker/core/depth_image.h"
-#include "sdf_tracker/core/surface.h"
+#include "sdf_tracker/camera/camera.h"
+#include "sdf_tracker/camera/depth_image.h"
+#include "sdf_tracker/surface/surface.h"
 
 /// Conversions between ROS messages and core types, in one place (REP 118 depth: 16UC1
 /// millimetres or 32FC1 metres, 0 or NaN = no measurement).

@@ -12,8 +12,8 @@
 #include <ros/ros.h>
 #include <std_msgs/Header.h>
 
-#include "sdf_tracker/core/chunked_mesh.h"
-#include "sdf_tracker/core/tsdf_map.h"
+#include "sdf_tracker/map/tsdf_map.h"
+#include "sdf_tracker/surface/chunked_mesh.h"
 
 namespace sdf_tracker_ros {
 

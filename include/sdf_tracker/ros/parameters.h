@@ -6,7 +6,7 @@
 #include <ros/ros.h>
 
 #include "sdf_tracker/SdfTrackerConfig.h"
-#include "sdf_tracker/core/parameters.h"
+#include "sdf_tracker/pipeline/parameters.h"
 
 /// All of the node's ROS parameter and dynamic_reconfigure code: the tracker's settings come
 /// through the core's parameter table, the node's own options are read here.

@@ -14,7 +14,7 @@
 #include <sensor_msgs/Image.h>
 
 #include "sdf_tracker/SdfTrackerConfig.h"
-#include "sdf_tracker/core/parameters.h"
+#include "sdf_tracker/pipeline/parameters.h"
 #include "sdf_tracker/ros/map_publisher.h"
 #include "sdf_tracker/ros/map_services.h"
 #include "sdf_tracker/ros/parameters.h"

@@ -6,8 +6,8 @@
 
 #include <ros/time.h>
 
-#include "sdf_tracker/core/io.h"
-#include "sdf_tracker/core/pipeline.h"
+#include "sdf_tracker/io/trajectory_file.h"
+#include "sdf_tracker/pipeline/pipeline.h"
 
 namespace sdf_tracker_ros {
 

@@ -1,0 +1,51 @@
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sdf_tracker/io/trajectory_file.h"
+
+/// Trajectory error metrics as defined by the TUM RGB-D benchmark (Sturm et al., IROS 2012).
+namespace sdf_tracker::evaluation {
+
+struct ErrorStats {
+  double rmse = 0.0;
+  double mean = 0.0;
+  double median = 0.0;
+  double max = 0.0;
+  size_t count = 0;
+};
+
+ErrorStats summarize(std::vector<double> errors);
+
+/// Pairs (estimate index, ground-truth index) whose timestamps are closest to each other and
+/// within max_difference_s, each index used at most once, in time order.
+std::vector<std::pair<size_t, size_t>> associate(const std::vector<io::StampedPose>& estimate,
+                                                 const std::vector<io::StampedPose>& ground_truth,
+                                                 double max_difference_s = 0.02);
+
+/// Absolute trajectory error after the rigid (rotation + translation, no scale) alignment of the
+/// estimate's positions onto the ground truth's that minimises the squared error.
+struct AteResult {
+  ErrorStats translation_m;
+  Eigen::Isometry3d T_gt_est = Eigen::Isometry3d::Identity();  ///< the alignment
+  std::vector<double> timestamps_s;
+  std::vector<double> errors_m;
+  std::vector<Eigen::Vector3d> aligned_estimate;
+  std::vector<Eigen::Vector3d> ground_truth;
+};
+/// Throws std::invalid_argument when fewer than 3 poses associate.
+AteResult computeAte(const std::vector<io::StampedPose>& estimate, const std::vector<io::StampedPose>& ground_truth,
+                     double max_difference_s = 0.02);
+
+/// Relative pose error over a fixed time window, per second of that window.
+struct RpeResult {
+  ErrorStats translation_m_per_s;
+  ErrorStats rotation_deg_per_s;
+};
+/// Empty stats (count 0) when the trajectory is shorter than the window.
+RpeResult computeRpe(const std::vector<io::StampedPose>& estimate, const std::vector<io::StampedPose>& ground_truth,
+                     double window_s = 1.0, double max_difference_s = 0.02);
+
+}  // namespace sdf_tracker::evaluation

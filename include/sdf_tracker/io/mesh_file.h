@@ -1,0 +1,20 @@
+#pragma once
+
+#include <string>
+
+#include "sdf_tracker/surface/surface.h"
+
+/// Surfaces as files: binary PLY (clouds and meshes, with normals) and Wavefront OBJ.
+namespace sdf_tracker::io {
+
+/// Binary little-endian PLY with normals.
+void writePly(const std::string& path, const SurfaceCloud& cloud);
+void writePly(const std::string& path, const TriangleMesh& mesh);
+/// Wavefront OBJ, as the reference release's triangles.obj.
+void writeObj(const std::string& path, const TriangleMesh& mesh);
+/// A mesh file chosen by its extension: Wavefront OBJ for a .obj path, binary PLY for any other.
+void writeMesh(const std::string& path, const TriangleMesh& mesh);
+/// Reads a PLY written by writePly(mesh) (binary or ASCII vertices x y z and triangle faces).
+TriangleMesh readPlyMesh(const std::string& path);
+
+}  // namespace sdf_tracker::io

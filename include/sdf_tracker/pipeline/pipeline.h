@@ -1,0 +1,173 @@
+#pragma once
+
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "sdf_tracker/camera/camera.h"
+#include "sdf_tracker/camera/depth_image.h"
+#include "sdf_tracker/camera/depth_undistortion.h"
+#include "sdf_tracker/fusion/integrator.h"
+#include "sdf_tracker/map/block_swap.h"
+#include "sdf_tracker/map/tsdf_map.h"
+#include "sdf_tracker/surface/raycaster.h"
+#include "sdf_tracker/tracking/motion_model.h"
+#include "sdf_tracker/tracking/tracker.h"
+
+namespace sdf_tracker {
+
+/// Everything the tracking-and-mapping loop needs, one aggregate per component.
+struct PipelineConfig {
+  VolumeConfig volume;
+  IntegratorConfig integrator;
+  TrackerConfig tracker;
+  RaycastConfig raycast;
+  /// Depths outside [min_depth_m, max_depth_m] are treated as no measurement (the reference
+  /// release rejects depth under 0.4 m).
+  double min_depth_m = 0.4;
+  double max_depth_m = 8.0;
+  /// Where the first camera sits in the grid, as a fraction of the grid's extent along each axis
+  /// (world axes = the first camera's axes). (0.5, 0.5, 0) puts it at the centre of the grid's
+  /// near face, looking in along +z. The grid's origin follows from this: volume.origin_W is
+  /// not read.
+  Eigen::Vector3d initial_camera_in_grid = Eigen::Vector3d(0.5, 0.5, 0.0);
+  /// Fuse a tracked frame only when the camera moved at least this much (|xi| of the motion
+  /// since the last fused frame, metres and radians); 0 fuses every frame.
+  double min_pose_change_to_fuse = 0.0;
+  /// After this many consecutive tracking failures the map is cleared and rebuilt from the next
+  /// frame at the held pose; 0 never resets.
+  int reset_after_failures = 0;
+  /// Start tracking from a constant-velocity prediction (the last motion, scaled to the time
+  /// since the last tracked frame, so dropped frames are bridged). When tracking from the
+  /// prediction fails, the frame is tracked again from the last pose. Off: from the last pose.
+  bool predict_motion = false;
+  /// No prediction across a gap longer than this [s]: the last motion says little by then.
+  double max_prediction_gap_s = 0.5;
+  /// Sparse map only: above this many MiB, blocks away from the camera are swapped to disk (see
+  /// MapMemoryBudget); 0 never.
+  double max_map_memory_mb = 0.0;
+  /// Where the swap file is made; empty: the system's temporary directory.
+  std::string swap_directory;
+
+  std::vector<std::string> validate() const;
+};
+
+/// What happened to one frame.
+struct FrameReport {
+  TrackResult track;
+  bool initialised_map = false;  ///< the frame started (or restarted) the map
+  bool fused = false;
+  bool reset = false;  ///< the map was cleared before this frame after repeated failures
+  double tracking_ms = 0.0;
+  double fusion_ms = 0.0;
+  /// Blocks read back from the swap file before tracking, and written to it after fusion
+  /// (MaxMemoryMB).
+  size_t blocks_swapped_in = 0;
+  size_t blocks_swapped_out = 0;
+  /// Set on the frame at which swapping starts: what to tell the user, once.
+  std::string swap_notice;
+  /// Set on the frame at which the map stays above MaxMemoryMB after swapping, once until it is
+  /// back within: why, and what to change.
+  std::string swap_warning;
+  /// The swap file failed (e.g. the disk is full): what and where. Blocks that could not be
+  /// written stay in memory; blocks that could not be read back stay in the file.
+  std::string swap_error;
+};
+
+/// The on-line loop: track each frame against the map, then fuse it at the tracked pose. Owns the
+/// volume and the current pose; no I/O, no ROS. Not thread safe: one caller at a time.
+class SdfPipeline {
+ public:
+  /// Throws std::invalid_argument naming every violation of the config.
+  explicit SdfPipeline(const PipelineConfig& config);
+
+  const PipelineConfig& config() const { return config_; }
+
+  /// Tracks and fuses one depth image (metres) taken at `timestamp_s` (any clock; frames must come
+  /// in time order; NaN: evenly spaced frames). Bad input yields a report with kBadInput; the map
+  /// and pose are then untouched. The camera must match the image size; its lens distortion, if
+  /// any, is removed from the image first.
+  FrameReport processFrame(const DepthImage& depth, const PinholeCamera& camera,
+                           double timestamp_s = std::numeric_limits<double>::quiet_NaN());
+
+  /// Measures the tracker alone: tracks the frame from the given pose T_W_C (e.g. the true one),
+  /// reports where the tracker took it, and then fuses the frame at the given pose, whatever the
+  /// tracker did. Fed the true poses, the report's error is the tracker's own against a map fused
+  /// at true poses, free of the drift that fusion at estimated poses adds. The first frame's
+  /// given pose places the map (sdf_tracker_offline --fuse-ground-truth).
+  FrameReport processFrameAtPose(const DepthImage& depth, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C,
+                                 double timestamp_s = std::numeric_limits<double>::quiet_NaN());
+
+  /// Camera to world at the last accepted frame.
+  const Eigen::Isometry3d& pose() const { return T_W_C_; }
+  /// The map in memory (a TsdfVolume or a SparseTsdfMap, per config().volume.type): with a
+  /// memory budget, without the blocks swapped to disk (see withWholeMap()).
+  const TsdfMap& map() const { return *map_; }
+  /// A copy of the whole map, swapped blocks included: what a save or a whole mesh must read.
+  std::unique_ptr<TsdfMap> copyWholeMap() const;
+  /// Calls fn(const TsdfMap&) with the whole map: the map itself when nothing is swapped out,
+  /// else a copy with the swapped blocks read back (memory beyond the budget while it runs).
+  template <typename Fn>
+  void withWholeMap(Fn&& fn) const {
+    if (!budget_ || budget_->swap().size() == 0) return fn(*map_);
+    fn(*copyWholeMap());
+  }
+  /// The memory budget (MaxMemoryMB), or nullptr when there is none.
+  const MapMemoryBudget* memoryBudget() const { return budget_.get(); }
+  /// Frames in a row that could not be tracked (0 while tracking works).
+  int consecutiveFailures() const { return consecutive_failures_; }
+
+  /// Clears the map and puts the camera back at the start pose.
+  void reset();
+  /// Replaces the map (e.g. a loaded .vti) with one of any type; the next frame is tracked against
+  /// it from the start pose.
+  void setMap(std::unique_ptr<TsdfMap> map);
+
+  /// Live-changeable settings (dynamic reconfigure): everything but the grid geometry. Throws
+  /// std::invalid_argument (leaving the pipeline unchanged) when the candidate is invalid or
+  /// changes the grid.
+  void updateConfig(const PipelineConfig& candidate);
+
+  /// The start pose: identity, with the volume placed around it per initial_camera_in_grid.
+  static Eigen::Vector3d volumeOriginFor(const PipelineConfig& config);
+
+ private:
+  /// processFrame, or with given_T_W_C processFrameAtPose.
+  FrameReport process(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s,
+                      const std::optional<Eigen::Isometry3d>& given_T_W_C);
+  /// The image as the tracker and integrator take it: undistorted, depths out of range removed.
+  DepthImage prepareDepth(const DepthImage& depth, const PinholeCamera& camera);
+  /// Where the camera should be at `timestamp_s` if it kept its last motion; the last pose when
+  /// prediction is off or there is no motion to go by.
+  Eigen::Isometry3d predictPose(double timestamp_s) const;
+  /// With a memory budget: reads back the swapped blocks near the view from T_W_C up to
+  /// furthest_m (what tracking or fusion there may touch), counted in the report.
+  void restoreNear(const Eigen::Isometry3d& T_W_C, const PinholeCamera& camera, float furthest_m, FrameReport* report);
+  /// With a memory budget and the map over it: swaps out blocks away from that view.
+  void evictAwayFrom(const Eigen::Isometry3d& T_W_C, const PinholeCamera& camera, float furthest_m,
+                     FrameReport* report);
+  /// Empties the map and its swap file; the next frame starts a new map. The pose is left to the
+  /// caller.
+  void clearMap();
+
+  PipelineConfig config_;
+  std::unique_ptr<TsdfMap> map_;
+  std::unique_ptr<Integrator> integrator_;
+  std::unique_ptr<Tracker> tracker_;
+  /// The pixel map of the last distorted camera seen (made again when the camera changes).
+  std::optional<DepthUndistortion> undistortion_;
+  /// Present with a sparse map and max_map_memory_mb > 0.
+  std::unique_ptr<MapMemoryBudget> budget_;
+  Eigen::Isometry3d T_W_C_ = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
+  bool map_initialised_ = false;
+  int consecutive_failures_ = 0;
+  /// The last tracked poses, for the prediction; cleared by a failed frame.
+  MotionModel motion_;
+};
+
+}  // namespace sdf_tracker

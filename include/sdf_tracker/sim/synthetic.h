@@ -1,0 +1,107 @@
+#pragma once
+
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "sdf_tracker/camera/camera.h"
+#include "sdf_tracker/camera/depth_image.h"
+
+/// Analytic indoor scenes rendered along scripted camera paths, with exact ground truth: the
+/// project's own test data and the default sequence of the main job.
+namespace sdf_tracker::synthetic {
+
+/// An oriented box (a room when `inside` is true: rays hit its walls from within) or a sphere.
+struct Primitive {
+  enum class Shape { kBox, kSphere } shape = Shape::kBox;
+  Eigen::Vector3d centre_W = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d R_W_P = Eigen::Matrix3d::Identity();  ///< box axes in the world
+  Eigen::Vector3d half_extent_m = Eigen::Vector3d::Ones();  ///< box half sizes; sphere radius in x
+  bool inside = false;
+};
+
+/// Kinect v1-like depth noise (Nguyen, Izadi and Lovell, 3DIMPVT 2012) and sensor limits.
+struct NoiseModel {
+  bool enabled = true;
+  double max_range_m = 4.5;
+  double max_incidence_deg = 78.0;  ///< more grazing surfaces return nothing
+  double dropout_probability = 0.01;
+  /// Disparity quantisation: 1/8 pixel of a structured-light sensor with this focal length x
+  /// baseline product [px m].
+  double focal_baseline_px_m = 580.0 * 0.075;
+  /// Disparity steps per pixel (8 for a Kinect v1); 0 turns quantisation off.
+  int disparity_subpixels = 8;
+  /// Scales the axial Gaussian noise (1 = the fitted model, 0 = none).
+  double axial_noise_scale = 1.0;
+};
+
+enum class Motion;
+
+/// What the house has on its walls.
+enum class HouseWalls {
+  kFurnished,  ///< a picture or a shelf every metre of every wall, as in a lived-in flat
+  kBare,       ///< bare but for six pictures in the corridor: close to a wall the view holds one plane,
+               ///< which depth alone cannot place
+};
+
+class Scene {
+ public:
+  /// A room with a desk, objects on it, a cabinet and a slanted panel: every axis constrained.
+  static Scene indoorRoom();
+  /// One large wall and nothing else: three degrees of freedom unconstrained.
+  static Scene singleWall();
+  /// A 12 m x 10 m flat: a 2 m wide corridor along x with three rooms on one side and two on the
+  /// other, doors, furniture, and pictures on the corridor's walls; `walls` says what else the
+  /// walls carry.
+  static Scene house(HouseWalls walls = HouseWalls::kFurnished);
+  /// The scene a path is made for (`walls`: the house's, for the walk).
+  static Scene forMotion(Motion motion, HouseWalls walls = HouseWalls::kFurnished);
+
+  void add(const Primitive& p) { primitives_.push_back(p); }
+
+  /// Distance along a unit ray to the first surface and that surface's normal; false if none.
+  bool intersect(const Eigen::Vector3d& origin_W, const Eigen::Vector3d& dir_W, double* t,
+                 Eigen::Vector3d* normal_W) const;
+
+  /// Renders a depth image (metres, 0 = none) from T_W_C. With noise enabled, `seed` makes the
+  /// result repeatable and independent of the thread count.
+  DepthImage render(const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C, const NoiseModel& noise,
+                    uint32_t seed) const;
+
+ private:
+  std::vector<Primitive> primitives_;
+};
+
+enum class Motion {
+  kDesk,    ///< hand-held motion around a desk: translation and rotation on every axis
+  kSlow,    ///< the same path at half speed
+  kFast,    ///< the same path at twice the speed
+  kPlanar,  ///< sliding along a single wall: degenerate geometry
+  kLoop,    ///< a closed circle around the desk, ending where it started
+  kWalk,    ///< walking at 0.5 m/s through the house: along the corridor and round every room
+};
+Motion parseMotion(const std::string& name);  ///< throws std::invalid_argument
+std::string toString(Motion motion);
+
+/// Camera to world at time t [s] along a path. duration_s only sets the loop's period; the walk
+/// keeps its speed and its path (about 50 m) whatever the duration.
+Eigen::Isometry3d cameraPose(Motion motion, double t_s, double duration_s);
+
+struct SequenceSpec {
+  Motion motion = Motion::kDesk;
+  int frames = 300;
+  double rate_hz = 30.0;
+  NoiseModel noise;
+  uint32_t seed = 1;
+  HouseWalls house_walls = HouseWalls::kFurnished;  ///< what the walk's house has on its walls
+  PinholeCamera camera = PinholeCamera::tumFreiburg1();
+  double depth_factor = 5000.0;
+};
+
+/// Writes depth/, depth.txt, groundtruth.txt and intrinsics.txt under `directory` (created).
+void writeSequence(const std::string& directory, const SequenceSpec& spec);
+
+}  // namespace sdf_tracker::synthetic

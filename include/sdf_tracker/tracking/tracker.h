@@ -1,0 +1,121 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "sdf_tracker/camera/camera.h"
+#include "sdf_tracker/camera/depth_image.h"
+#include "sdf_tracker/camera/sensor_model.h"
+#include "sdf_tracker/map/tsdf_map.h"
+
+namespace sdf_tracker {
+
+/// One coarse-to-fine level: use every `stride`-th pixel in u and v, for at most `max_iterations`.
+struct PyramidLevel {
+  int stride;
+  int max_iterations;
+};
+
+struct TrackerConfig {
+  /// Coarse-to-fine schedule as data: the paper's 4/2/1 x 12/6/2 by default.
+  std::vector<PyramidLevel> levels = {{4, 12}, {2, 6}, {1, 2}};
+  /// Huber threshold k = huber_coefficient * Dmax (RobustStatisticCoefficient).
+  double huber_coefficient = 0.02;
+  /// Weight each point by the inverse variance of its depth (noise model) on top of Huber, and
+  /// widen its Huber threshold by the same noise ratio. Off: the paper's plain IRLS.
+  bool sensor_weights = false;
+  DepthNoiseModel noise;
+  /// Divide each residual and its gradient by the gradient norm, turning projective distances
+  /// (too long by 1/cos of the angle between ray and surface normal) into metric ones. Off: the
+  /// paper's plain D(Tp).
+  bool normalize_by_gradient = false;
+  /// alpha = regularization * (iteration within the level, from 1), eq. (21).
+  double regularization = 0.01;
+  /// A level ends early when |delta xi| falls below this (ConvergenceCondition).
+  double convergence_threshold = 1e-4;
+  /// Fewer valid points than this at any iteration: kTooFewPoints.
+  int min_valid_points = 200;
+  /// An eigenvalue of the scaled normal equations below this fraction of the largest marks a
+  /// direction the geometry does not constrain (e.g. sliding along a wall): kDegenerate.
+  double min_inverse_condition = 1e-4;
+  /// What a degenerate frame does. false (the paper): it fails, the pose is held and nothing is
+  /// fused. true: each Gauss-Newton step solves only the directions the geometry constrains (the
+  /// eigenvectors above min_inverse_condition), the others keep the guess, i.e. the motion model's
+  /// prediction; the frame is still reported kDegenerate with its constrained rank, but its pose
+  /// is used and fused.
+  bool solve_constrained_directions = false;
+  /// A final step |delta xi| larger than this: kNotConverged.
+  double max_final_step = 5e-3;
+  /// At the estimate, fewer than this fraction of the last (finest) level's points (of those the
+  /// map could hold) lie in the truncation band of a mapped surface: kLowOverlap. Tracking that
+  /// converged in the wrong place (typically when it resumes after a loss) fits only a part of the
+  /// image; frame-to-frame overlap keeps tracked frames above 0.75 on real sequences, above 0.55
+  /// on the synthetic house walk (bench/results/2026-11-23_real_data_limits.md). 0: off (the paper).
+  double min_overlap = 0.0;
+  /// Motion from the guess beyond either limit: kDiverged (larger than a hand-held camera moves
+  /// between two frames at 30 Hz, and beyond the truncation band's basin of convergence).
+  double max_translation_m = 0.25;
+  double max_rotation_rad = 0.5;
+
+  std::vector<std::string> validate() const;
+};
+
+enum class TrackStatus {
+  kOk,
+  kNotConverged,  ///< iterations ran out with the pose still moving.
+  kTooFewPoints,  ///< too few points landed in observed parts of the field.
+  kDegenerate,    ///< the geometry does not constrain all six degrees of freedom (e.g. one plane).
+                  ///< With solve_constrained_directions the pose is still estimated (see tracked()).
+  kDiverged,      ///< the solution ran away or became non-finite.
+  kBadInput,      ///< the depth image is empty, of the wrong size, or holds no measurement.
+  kLowOverlap,    ///< at the estimate, too few of the image's points lie near mapped surfaces.
+};
+
+const char* toString(TrackStatus status);
+
+struct TrackResult {
+  TrackStatus status = TrackStatus::kBadInput;
+  /// The estimate (camera to world). For kOk and kNotConverged it is the optimised pose; for any
+  /// other status it is the guess, unchanged.
+  Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+  std::vector<int> iterations_per_level;
+  double rms_residual_m = 0.0;  ///< RMS of D at the valid points of the last iteration.
+  int valid_points = 0;         ///< points used in the last iteration.
+  /// valid_points over the points of the last (finest) level that land, at the estimate, where
+  /// the map could hold a value (inside a dense grid; anywhere for the sparse map).
+  double overlap = 0.0;
+  double inverse_condition = 0.0;
+  /// How many of the six directions the geometry constrained in the last iteration.
+  int constrained_rank = 0;
+  /// T_W_C is an estimate (ok, not converged, or degenerate solved in its constrained
+  /// directions), not the guess handed back.
+  bool pose_estimated = false;
+  double final_step = 0.0;  ///< |delta xi| of the last iteration.
+  std::string message;      ///< why, in words, when status != kOk.
+
+  bool ok() const { return status == TrackStatus::kOk; }
+  /// The frame's pose can be used and the frame fused: ok, or degenerate with its constrained
+  /// directions solved and the rest predicted.
+  bool tracked() const { return ok() || (status == TrackStatus::kDegenerate && pose_estimated); }
+};
+
+/// Registers a depth image directly against the TSDF (Section III): Gauss-Newton on the sum of
+/// squared field values at the transformed points, Huber IRLS, growing Tikhonov regularisation,
+/// coarse-to-fine pixel strides. Stateless apart from its config; thread safe.
+class Tracker {
+ public:
+  /// Throws std::invalid_argument naming every violation of the config.
+  explicit Tracker(const TrackerConfig& config);
+
+  const TrackerConfig& config() const { return config_; }
+
+  TrackResult track(const DepthImage& depth, const PinholeCamera& camera, const TsdfMap& map,
+                    const Eigen::Isometry3d& T_W_C_guess) const;
+
+ private:
+  TrackerConfig config_;
+};
+
+}  // namespace sdf_tracker

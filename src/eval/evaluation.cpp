@@ -1,0 +1,111 @@
+#include "sdf_tracker/eval/evaluation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <tuple>
+
+#include <Eigen/Geometry>
+
+#include "sdf_tracker/util/se3.h"
+
+namespace sdf_tracker::evaluation {
+
+ErrorStats summarize(std::vector<double> errors) {
+  ErrorStats stats;
+  stats.count = errors.size();
+  if (errors.empty()) return stats;
+  double sum = 0.0, sum_sq = 0.0;
+  for (double e : errors) {
+    sum += e;
+    sum_sq += e * e;
+    stats.max = std::max(stats.max, e);
+  }
+  stats.mean = sum / errors.size();
+  stats.rmse = std::sqrt(sum_sq / errors.size());
+  const size_t mid = errors.size() / 2;
+  std::nth_element(errors.begin(), errors.begin() + mid, errors.end());
+  stats.median = errors[mid];
+  if (errors.size() % 2 == 0) {
+    stats.median = 0.5 * (stats.median + *std::max_element(errors.begin(), errors.begin() + mid));
+  }
+  return stats;
+}
+
+std::vector<std::pair<size_t, size_t>> associate(const std::vector<io::StampedPose>& estimate,
+                                                 const std::vector<io::StampedPose>& ground_truth,
+                                                 double max_difference_s) {
+  // Candidates sorted by time difference, then taken greedily (as the benchmark's associate.py).
+  std::vector<std::tuple<double, size_t, size_t>> candidates;
+  for (size_t i = 0; i < estimate.size(); ++i) {
+    const double t = estimate[i].timestamp_s;
+    auto it = std::lower_bound(ground_truth.begin(), ground_truth.end(), t,
+                               [](const io::StampedPose& p, double time) { return p.timestamp_s < time; });
+    const size_t hi = static_cast<size_t>(it - ground_truth.begin());
+    for (size_t j = hi >= 2 ? hi - 2 : 0; j < std::min(ground_truth.size(), hi + 2); ++j) {
+      const double dt = std::fabs(ground_truth[j].timestamp_s - t);
+      if (dt <= max_difference_s) candidates.emplace_back(dt, i, j);
+    }
+  }
+  std::sort(candidates.begin(), candidates.end());
+  std::vector<bool> est_used(estimate.size()), gt_used(ground_truth.size());
+  std::vector<std::pair<size_t, size_t>> matches;
+  for (const auto& [dt, i, j] : candidates) {
+    if (est_used[i] || gt_used[j]) continue;
+    est_used[i] = gt_used[j] = true;
+    matches.emplace_back(i, j);
+  }
+  std::sort(matches.begin(), matches.end());
+  return matches;
+}
+
+AteResult computeAte(const std::vector<io::StampedPose>& estimate, const std::vector<io::StampedPose>& ground_truth,
+                     double max_difference_s) {
+  const auto matches = associate(estimate, ground_truth, max_difference_s);
+  if (matches.size() < 3) {
+    throw std::invalid_argument("only " + std::to_string(matches.size()) +
+                                " estimated poses have a ground-truth pose within " +
+                                std::to_string(max_difference_s) + " s; ATE needs at least 3");
+  }
+  Eigen::Matrix3Xd est(3, matches.size()), gt(3, matches.size());
+  for (size_t m = 0; m < matches.size(); ++m) {
+    est.col(m) = estimate[matches[m].first].T_W_C.translation();
+    gt.col(m) = ground_truth[matches[m].second].T_W_C.translation();
+  }
+  AteResult result;
+  result.T_gt_est.matrix() = Eigen::umeyama(est, gt, false);
+  for (size_t m = 0; m < matches.size(); ++m) {
+    const Eigen::Vector3d aligned = result.T_gt_est * est.col(m);
+    result.timestamps_s.push_back(estimate[matches[m].first].timestamp_s);
+    result.errors_m.push_back((aligned - gt.col(m)).norm());
+    result.aligned_estimate.push_back(aligned);
+    result.ground_truth.push_back(gt.col(m));
+  }
+  result.translation_m = summarize(result.errors_m);
+  return result;
+}
+
+RpeResult computeRpe(const std::vector<io::StampedPose>& estimate, const std::vector<io::StampedPose>& ground_truth,
+                     double window_s, double max_difference_s) {
+  const auto matches = associate(estimate, ground_truth, max_difference_s);
+  std::vector<double> translation_errors, rotation_errors;
+  size_t j = 0;
+  for (size_t i = 0; i < matches.size(); ++i) {
+    const double t_i = estimate[matches[i].first].timestamp_s;
+    j = std::max(j, i + 1);
+    while (j < matches.size() && estimate[matches[j].first].timestamp_s < t_i + window_s) ++j;
+    if (j >= matches.size()) break;
+    const auto& e_i = estimate[matches[i].first];
+    const auto& e_j = estimate[matches[j].first];
+    const auto& g_i = ground_truth[matches[i].second];
+    const auto& g_j = ground_truth[matches[j].second];
+    const double dt = g_j.timestamp_s - g_i.timestamp_s;
+    const Eigen::Isometry3d error =
+        (g_i.T_W_C.inverse() * g_j.T_W_C).inverse() * (e_i.T_W_C.inverse() * e_j.T_W_C);
+    translation_errors.push_back(error.translation().norm() / dt);
+    rotation_errors.push_back(rotationAngle(error) * 180.0 / M_PI / dt);
+  }
+  return {summarize(translation_errors), summarize(rotation_errors)};
+}
+
+}  // namespace sdf_tracker::evaluation

@@ -1,0 +1,68 @@
+#include "sdf_tracker/io/files.h"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <sstream>
+#include <stdexcept>
+
+#include <sys/stat.h>
+
+namespace sdf_tracker::io {
+
+namespace {
+
+std::string temporaryPathFor(const std::string& path) { return path + ".tmp"; }
+
+}  // namespace
+
+void throwFileError(const std::string& path, const std::string& what) {
+  throw std::runtime_error(path + ": " + what);
+}
+
+AtomicOutput::AtomicOutput(const std::string& path)
+    : path_(path), temporary_(temporaryPathFor(path)), out_(temporary_, std::ios::binary | std::ios::trunc) {
+  if (!out_) throwFileError(path_, std::string("cannot open for writing: ") + std::strerror(errno));
+}
+
+AtomicOutput::~AtomicOutput() {
+  if (!committed_) std::remove(temporary_.c_str());
+}
+
+void AtomicOutput::commit() {
+  out_.close();
+  if (!out_) throwFileError(path_, "write failed (disk full?)");
+  if (std::rename(temporary_.c_str(), path_.c_str()) != 0) {
+    throwFileError(path_, std::string("cannot move the written file into place: ") + std::strerror(errno));
+  }
+  committed_ = true;
+}
+
+bool hasExtension(const std::string& path, const std::string& extension) {
+  return path.size() > extension.size() && path.compare(path.size() - extension.size(), extension.size(), extension) == 0;
+}
+
+void makeDirectories(const std::string& path) {
+  std::string partial = !path.empty() && path[0] == '/' ? "/" : "";
+  std::istringstream parts(path);
+  std::string part;
+  while (std::getline(parts, part, '/')) {
+    if (part.empty()) continue;
+    partial += part + "/";
+    if (::mkdir(partial.c_str(), 0755) != 0 && errno != EEXIST) {
+      throwFileError(partial, std::string("cannot create directory: ") + std::strerror(errno));
+    }
+  }
+}
+
+bool removeStaleTemporary(const std::string& path) {
+  return std::remove(temporaryPathFor(path).c_str()) == 0;
+}
+
+void writeTextFile(const std::string& path, const std::string& text) {
+  AtomicOutput out(path);
+  out.stream() << text;
+  out.commit();
+}
+
+}  // namespace sdf_tracker::io

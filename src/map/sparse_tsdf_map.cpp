@@ -1,0 +1,272 @@
+#include "sdf_tracker/map/sparse_tsdf_map.h"
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <utility>
+
+namespace sdf_tracker {
+
+SparseTsdfMap::SparseTsdfMap(const VolumeConfig& config) : TsdfMap(config, MapType::kSparse) {}
+
+VoxelBlock& SparseTsdfMap::allocate(const BlockIndex& block) {
+  if (!inKeyRange(block)) {
+    std::ostringstream msg;
+    msg << "block (" << block.transpose() << ") lies beyond the sparse map's reach of " << kMaxBlock
+        << " blocks from the origin (" << kMaxBlock * blockSize() << " m)";
+    throw std::out_of_range(msg.str());
+  }
+  return blocks_.findOrInsert(keyOf(block), [this] {
+    auto fresh = std::make_unique<VoxelBlock>();
+    fresh->voxels.fill(Voxel{positive_truncation_, 0.0f});
+    return fresh;
+  });
+}
+
+void SparseTsdfMap::remove(const BlockIndex& block) {
+  if (inKeyRange(block) && blocks_.erase(keyOf(block))) removed_at_ = ++revision_;
+}
+
+void SparseTsdfMap::discardUnobserved(const BlockIndex& block) {
+  if (inKeyRange(block)) blocks_.erase(keyOf(block));
+}
+
+std::vector<SparseTsdfMap::BlockIndex> SparseTsdfMap::indicesOf(std::vector<uint64_t> keys) {
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  std::vector<BlockIndex> indices;
+  indices.reserve(keys.size());
+  for (uint64_t key : keys) indices.push_back(indexOf(key));
+  return indices;
+}
+
+std::vector<SparseTsdfMap::BlockIndex> SparseTsdfMap::blockIndices() const {
+  std::vector<uint64_t> keys;
+  keys.reserve(blocks_.size());
+  blocks_.forEach([&keys](uint64_t key, const VoxelBlock&) { keys.push_back(key); });
+  return indicesOf(std::move(keys));
+}
+
+Voxel SparseTsdfMap::voxel(const Eigen::Vector3i& voxel) const {
+  const VoxelBlock* block = find(blockOf(voxel));
+  return block ? block->voxels[VoxelBlock::index(localOf(voxel))] : Voxel{positive_truncation_, 0.0f};
+}
+
+void SparseTsdfMap::bounds(Eigen::Vector3i* first, Eigen::Vector3i* dims) const {
+  if (blocks_.empty()) {
+    *first = *dims = Eigen::Vector3i::Zero();
+    return;
+  }
+  Eigen::Vector3i lo = Eigen::Vector3i::Constant(INT_MAX), hi = Eigen::Vector3i::Constant(INT_MIN);
+  forEachBlock([&lo, &hi](const BlockIndex& b, const VoxelBlock&) {
+    lo = lo.cwiseMin(b);
+    hi = hi.cwiseMax(b);
+  });
+  *first = firstVoxel(lo);
+  *dims = (hi - lo + Eigen::Vector3i::Ones()) * kBlockSide;
+}
+
+namespace {
+
+/// The lattice voxels [first, first + dims) of a map on `lattice`, read through voxelAt(index), as
+/// a dense grid at their place.
+template <typename VoxelAt>
+TsdfVolume cropOf(const VolumeConfig& lattice, const Eigen::Vector3i& first, const Eigen::Vector3i& dims,
+                  const VoxelAt& voxelAt) {
+  VolumeConfig crop = lattice;
+  crop.dims = dims;
+  crop.origin_W = lattice.origin_W + lattice.voxel_size_m * first.cast<double>();
+  TsdfVolume volume(crop);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int k = 0; k < dims.z(); ++k) {
+    for (int j = 0; j < dims.y(); ++j) {
+      for (int i = 0; i < dims.x(); ++i) volume.setVoxel(i, j, k, voxelAt(first + Eigen::Vector3i(i, j, k)));
+    }
+  }
+  return volume;
+}
+
+}  // namespace
+
+TsdfVolume SparseTsdfMap::toDense(const Eigen::Vector3i& first, const Eigen::Vector3i& dims) const {
+  return cropOf(config_, first, dims, [this](const Eigen::Vector3i& index) { return voxel(index); });
+}
+
+void SparseTsdfMap::clear() {
+  blocks_.clear();
+  cleared_at_ = ++revision_;
+}
+
+std::vector<SparseTsdfMap::BlockIndex> SparseTsdfMap::changedSince(uint64_t revision) const {
+  std::vector<uint64_t> keys;
+  blocks_.forEach([&keys, revision](uint64_t key, const VoxelBlock& block) {
+    if (block.changed_at > revision) keys.push_back(key);
+  });
+  return indicesOf(std::move(keys));
+}
+
+void SparseTsdfMap::copyBlocksFrom(const SparseTsdfMap& source, const std::vector<BlockIndex>& blocks) {
+  if (!config_.sameGrid(source.config_)) {
+    throw std::invalid_argument("copyBlocksFrom: the maps differ in geometry");
+  }
+  for (const BlockIndex& index : blocks) {
+    const VoxelBlock* from = source.find(index);
+    if (from) allocate(index) = *from;
+    else remove(index);
+  }
+}
+
+size_t SparseTsdfMap::memoryBytes() const {
+  // The blocks and the table's slots.
+  return blocks_.size() * sizeof(VoxelBlock) + blocks_.capacity() * BlockTable<VoxelBlock>::slotBytes();
+}
+
+template <typename FindBlock>
+bool SparseTsdfMap::sampleVia(const Eigen::Vector3f& p_W, FieldSample* out, const FindBlock& findBlock) const {
+  const Eigen::Vector3f g = toLattice(p_W);
+  if (!withinReach(g)) return false;
+  const Eigen::Vector3f floor_g(std::floor(g.x()), std::floor(g.y()), std::floor(g.z()));
+  const Eigen::Vector3i base = floor_g.cast<int>();
+  const Eigen::Vector3i local = localOf(base);
+  Voxel corners[8];
+  if (local.maxCoeff() < kBlockSide - 1) {
+    // The whole cell lies in one block (343 of 512 cells): one lookup.
+    const VoxelBlock* block = findBlock(blockOf(base));
+    if (!block) return false;
+    const Voxel* v = block->voxels.data() + VoxelBlock::index(local);
+    constexpr int dy = kBlockSide, dz = kBlockSide * kBlockSide;
+    corners[0] = v[0], corners[1] = v[1], corners[2] = v[dy], corners[3] = v[dy + 1];
+    corners[4] = v[dz], corners[5] = v[dz + 1], corners[6] = v[dz + dy], corners[7] = v[dz + dy + 1];
+  } else {
+    // The cell straddles blocks: each corner from its own block.
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3i corner = base + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+      const VoxelBlock* block = findBlock(blockOf(corner));
+      if (!block) return false;
+      corners[c] = block->voxels[VoxelBlock::index(localOf(corner))];
+    }
+  }
+  return interpolate(corners, g - floor_g, out);
+}
+
+bool SparseTsdfMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
+  // withinReach() held, so every block index is in key range.
+  return sampleVia(p_W, out, [this](const BlockIndex& block) { return blocks_.find(keyOf(block)); });
+}
+
+/// The blocks of a box of block indices in a flat array (null where the map holds none), filled
+/// once; samples whose blocks all lie in the box read them from it, others go through the table.
+class SparseTsdfMap::RegionSampler final : public FieldSampler {
+ public:
+  RegionSampler(const SparseTsdfMap& map, const Eigen::AlignedBox3f& region_W) : map_(map) {
+    // A cell at the box's far edge reads the next voxel too.
+    const Eigen::AlignedBox3f cells_W(region_W.min(), region_W.max() + Eigen::Vector3f::Constant(map.voxelSize()));
+    const BlockBox box = map.blockRange(cells_W);
+    if (box.empty() || box.count() > kMaxCells) return;  // sample through the table
+    first_ = box.first;
+    dims_ = box.last - box.first + BlockIndex::Ones();
+    cells_.assign(static_cast<size_t>(box.count()), nullptr);
+    map.forEachBlockIn(box, [this](const BlockIndex& index, const VoxelBlock& block) { cells_[cellOf(index)] = &block; });
+  }
+
+  bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override {
+    return map_.sampleVia(p_W, out, [this](const BlockIndex& block) {
+      const int at = cellOf(block);
+      return at >= 0 ? cells_[at] : map_.blocks_.find(keyOf(block));
+    });
+  }
+
+ private:
+  /// Bounds the array at 2 MiB of pointers (a 10 m cube of 16 cm blocks); larger regions sample
+  /// through the table.
+  static constexpr double kMaxCells = 1 << 18;
+
+  /// The block's place in cells_, or -1 outside the box.
+  int cellOf(const BlockIndex& block) const {
+    // Unsigned, a negative offset compares as large: one test per axis.
+    const auto x = static_cast<unsigned>(block.x() - first_.x()), y = static_cast<unsigned>(block.y() - first_.y()),
+               z = static_cast<unsigned>(block.z() - first_.z());
+    if (x >= static_cast<unsigned>(dims_.x()) || y >= static_cast<unsigned>(dims_.y()) ||
+        z >= static_cast<unsigned>(dims_.z())) {
+      return -1;
+    }
+    return static_cast<int>((z * dims_.y() + y) * dims_.x() + x);
+  }
+
+  const SparseTsdfMap& map_;
+  BlockIndex first_ = BlockIndex::Zero();
+  Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
+  std::vector<const VoxelBlock*> cells_;
+};
+
+std::unique_ptr<FieldSampler> SparseTsdfMap::sampler(const Eigen::AlignedBox3f& region_W) const {
+  return std::make_unique<RegionSampler>(*this, region_W);
+}
+
+TsdfVolume toDenseVolume(const TsdfMap& map) {
+  if (map.type() == MapType::kDense) return static_cast<const TsdfVolume&>(map);
+  const auto& sparse = static_cast<const SparseTsdfMap&>(map);
+  Eigen::Vector3i first, dims;
+  sparse.bounds(&first, &dims);
+  if (dims.minCoeff() < 2) throw std::invalid_argument("the sparse map holds no block to export");
+  return sparse.toDense(first, dims);
+}
+
+TsdfVolume toDenseVolume(const TsdfMap& map, const Eigen::AlignedBox3d& region_W) {
+  const VolumeConfig& c = map.config();
+  // The lattice voxels inside the box: from the first at or above its minimum to the last at or
+  // below its maximum.
+  Eigen::Vector3d lo = ((region_W.min() - c.origin_W) / c.voxel_size_m).array().ceil();
+  Eigen::Vector3d hi = ((region_W.max() - c.origin_W) / c.voxel_size_m).array().floor();
+  if (map.type() == MapType::kDense) {
+    lo = lo.cwiseMax(Eigen::Vector3d::Zero());
+    hi = hi.cwiseMin((c.dims - Eigen::Vector3i::Ones()).cast<double>());
+  }
+  const Eigen::Vector3d dims = hi - lo + Eigen::Vector3d::Ones();
+  if (!region_W.min().allFinite() || !region_W.max().allFinite() || !(dims.minCoeff() >= 2.0) ||
+      !(dims.maxCoeff() <= 4096.0)) {
+    std::ostringstream msg;
+    msg << "the region from (" << region_W.min().transpose() << ") to (" << region_W.max().transpose()
+        << ") m holds " << (dims.array().max(0.0)).transpose() << " voxels of the map's "
+        << c.voxel_size_m << " m lattice";
+    msg << (map.type() == MapType::kDense ? " inside its grid" : "") << "; a volume needs 2 to 4096 along each axis";
+    throw std::invalid_argument(msg.str());
+  }
+  const Eigen::Vector3i first = lo.cast<int>();
+  if (map.type() == MapType::kSparse) return static_cast<const SparseTsdfMap&>(map).toDense(first, dims.cast<int>());
+  const auto& dense = static_cast<const TsdfVolume&>(map);
+  return cropOf(c, first, dims.cast<int>(), [&dense](const Eigen::Vector3i& v) { return dense.voxel(v.x(), v.y(), v.z()); });
+}
+
+SparseTsdfMap toSparseMap(const TsdfMap& map) {
+  if (map.type() == MapType::kSparse) return static_cast<const SparseTsdfMap&>(map);
+  const auto& dense = static_cast<const TsdfVolume&>(map);
+  SparseTsdfMap sparse(dense.config());
+  const Eigen::Vector3i dims = dense.dims();
+  const SparseTsdfMap::BlockIndex last = SparseTsdfMap::blockOf(dims - Eigen::Vector3i::Ones());
+  for (int bz = 0; bz <= last.z(); ++bz) {
+    for (int by = 0; by <= last.y(); ++by) {
+      for (int bx = 0; bx <= last.x(); ++bx) {
+        const SparseTsdfMap::BlockIndex index(bx, by, bz);
+        const Eigen::Vector3i first = SparseTsdfMap::firstVoxel(index);
+        const Eigen::Vector3i end = (first + Eigen::Vector3i::Constant(kBlockSide)).cwiseMin(dims);
+        VoxelBlock* block = nullptr;
+        for (int k = first.z(); k < end.z(); ++k) {
+          for (int j = first.y(); j < end.y(); ++j) {
+            for (int i = first.x(); i < end.x(); ++i) {
+              const Voxel v = dense.voxel(i, j, k);
+              if (v.weight <= 0.0f) continue;
+              if (!block) block = &sparse.allocate(index);
+              block->voxels[VoxelBlock::index(SparseTsdfMap::localOf({i, j, k}))] = v;
+            }
+          }
+        }
+      }
+    }
+  }
+  return sparse;
+}
+
+}  // namespace sdf_tracker

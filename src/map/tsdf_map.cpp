@@ -1,0 +1,89 @@
+#include "sdf_tracker/map/tsdf_map.h"
+
+#include <atomic>
+#include <sstream>
+#include <utility>
+
+#include "sdf_tracker/map/sparse_tsdf_map.h"
+#include "sdf_tracker/map/tsdf_volume.h"
+#include "sdf_tracker/util/validation.h"
+
+namespace sdf_tracker {
+
+const char* toString(MapType type) {
+  switch (type) {
+    case MapType::kDense: return "dense";
+    case MapType::kSparse: return "sparse";
+  }
+  return "unknown";
+}
+
+std::vector<std::string> VolumeConfig::validate() const {
+  Violations v;
+  v.requirePositive("voxel_size_m", voxel_size_m);
+  v.requireFinite("origin_W.x", origin_W.x());
+  v.requireFinite("origin_W.y", origin_W.y());
+  v.requireFinite("origin_W.z", origin_W.z());
+  v.requirePositive("positive_truncation_m", positive_truncation_m);
+  if (type == MapType::kSparse) {
+    v.require(!compact_voxels, "compact_voxels applies to the dense grid only");
+    return v.list();
+  }
+  v.requireInRange("dims.x", dims.x(), 2, 4096);
+  v.requireInRange("dims.y", dims.y(), 2, 4096);
+  v.requireInRange("dims.z", dims.z(), 2, 4096);
+  if (v.list().empty()) {
+    const double voxels = static_cast<double>(dims.x()) * dims.y() * dims.z();
+    std::ostringstream s;
+    s << "dims " << dims.x() << "x" << dims.y() << "x" << dims.z() << " need "
+      << voxels * sizeof(Voxel) / (1 << 30) << " GiB; at most 16 GiB is allowed";
+    v.require(voxels * sizeof(Voxel) <= 16.0 * (1ull << 30), s.str());
+  }
+  return v.list();
+}
+
+std::string VolumeConfig::describe() const {
+  std::ostringstream s;
+  if (type == MapType::kSparse) {
+    s << "sparse map of " << voxel_size_m << " m voxels in blocks of " << kBlockSide << "^3";
+  } else {
+    s << "dense grid " << dims.x() << "x" << dims.y() << "x" << dims.z() << " of " << voxel_size_m << " m";
+  }
+  return s.str();
+}
+
+TsdfMap::TsdfMap(VolumeConfig config, MapType type) : config_(std::move(config)) {
+  static std::atomic<uint64_t> next_identity{1};
+  identity_ = next_identity++;
+  config_.type = type;
+  throwIfInvalid("volume config", config_.validate());
+  voxel_size_ = static_cast<float>(config_.voxel_size_m);
+  inv_voxel_size_ = 1.0f / voxel_size_;
+  positive_truncation_ = static_cast<float>(config_.positive_truncation_m);
+  origin_ = config_.origin_W.cast<float>();
+}
+
+namespace {
+
+/// Samples through the map's own sample(): for storage with nothing to prepare.
+class DirectSampler final : public FieldSampler {
+ public:
+  explicit DirectSampler(const TsdfMap& map) : map_(map) {}
+  bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override { return map_.sample(p_W, out); }
+
+ private:
+  const TsdfMap& map_;
+};
+
+}  // namespace
+
+std::unique_ptr<FieldSampler> TsdfMap::sampler(const Eigen::AlignedBox3f& /*region_W*/) const {
+  return std::make_unique<DirectSampler>(*this);
+}
+
+std::unique_ptr<TsdfMap> makeMap(const VolumeConfig& config) {
+  if (config.type == MapType::kSparse) return std::make_unique<SparseTsdfMap>(config);
+  return std::make_unique<TsdfVolume>(config);
+}
+
+}  // namespace sdf_tracker

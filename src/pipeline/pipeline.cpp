@@ -1,0 +1,275 @@
+#include "sdf_tracker/pipeline/pipeline.h"
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+#include <stdexcept>
+
+#include "sdf_tracker/map/sparse_tsdf_map.h"
+#include "sdf_tracker/map/tsdf_volume.h"
+#include "sdf_tracker/util/se3.h"
+#include "sdf_tracker/util/validation.h"
+
+namespace sdf_tracker {
+
+namespace {
+
+double millisecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// What the pipeline may read or write of a sparse map around a view: the box of the view up to
+/// its furthest depth plus the truncation, widened by the motion a frame may still make.
+BlockBox blocksNearView(const SparseTsdfMap& map, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C,
+                        float furthest_m, double max_motion_m) {
+  const Eigen::AlignedBox3f view = camera.viewBox(T_W_C.cast<float>(), furthest_m + map.positiveTruncation());
+  const float margin = static_cast<float>(max_motion_m) + map.blockSize();
+  return map.blockRange(Eigen::AlignedBox3f(view.min().array() - margin, view.max().array() + margin));
+}
+
+/// The budget for the config, or none.
+std::unique_ptr<MapMemoryBudget> makeBudget(const PipelineConfig& config, MapType type) {
+  if (config.max_map_memory_mb <= 0.0 || type != MapType::kSparse) return nullptr;
+  const std::string directory =
+      config.swap_directory.empty() ? std::filesystem::temp_directory_path().string() : config.swap_directory;
+  try {
+    const size_t bytes = std::max<size_t>(1, static_cast<size_t>(config.max_map_memory_mb * 1048576.0));
+    return std::make_unique<MapMemoryBudget>(bytes, directory);
+  } catch (const std::runtime_error& e) {
+    throw std::invalid_argument(std::string("MaxMemoryMB needs a swap file (SwapDirectory): ") + e.what());
+  }
+}
+
+/// The grid's geometry with its origin placed for the start pose.
+VolumeConfig placedVolume(const PipelineConfig& config) {
+  VolumeConfig volume = config.volume;
+  volume.origin_W = SdfPipeline::volumeOriginFor(config);
+  return volume;
+}
+
+}  // namespace
+
+std::vector<std::string> PipelineConfig::validate() const {
+  Violations v;
+  v.merge("volume.", volume.validate());
+  v.merge("integrator.", integrator.validate());
+  v.merge("tracker.", tracker.validate());
+  v.merge("raycast.", raycast.validate());
+  v.requireNonNegative("min_depth_m", min_depth_m);
+  v.require(max_depth_m > min_depth_m, "max_depth_m must be > min_depth_m (got " + std::to_string(max_depth_m) +
+                                           " <= " + std::to_string(min_depth_m) + ")");
+  for (int axis = 0; axis < 3; ++axis) {
+    v.requireInRange("initial_camera_in_grid[" + std::to_string(axis) + "]", initial_camera_in_grid[axis], -1.0, 2.0);
+  }
+  v.requireNonNegative("min_pose_change_to_fuse", min_pose_change_to_fuse);
+  if (volume.compact_voxels) {
+    v.require(integrator.max_weight <= VoxelCodec<CompactVoxel>::kMaxWeight,
+              "integrator.max_weight must be <= " + std::to_string(VoxelCodec<CompactVoxel>::kMaxWeight) +
+                  " with compact voxels (got " + std::to_string(integrator.max_weight) + ")");
+  }
+  v.requireNonNegative("reset_after_failures", reset_after_failures);
+  v.requirePositive("max_prediction_gap_s", max_prediction_gap_s);
+  if (volume.positive_truncation_m > 0.0 && integrator.negative_truncation_m < 0.0) {
+    // The tracker needs samples on both sides of the surface: at least one voxel each way.
+    std::ostringstream s;
+    s << "the truncation band (" << integrator.negative_truncation_m << " .. " << volume.positive_truncation_m
+      << " m) must span at least one voxel (" << volume.voxel_size_m << " m) on each side";
+    v.require(volume.positive_truncation_m >= volume.voxel_size_m &&
+                  -integrator.negative_truncation_m >= volume.voxel_size_m,
+              s.str());
+  }
+  return v.list();
+}
+
+Eigen::Vector3d SdfPipeline::volumeOriginFor(const PipelineConfig& config) {
+  return -config.initial_camera_in_grid.cwiseProduct(config.volume.extent_m());
+}
+
+SdfPipeline::SdfPipeline(const PipelineConfig& config)
+    : config_(config), motion_(config.max_prediction_gap_s) {
+  throwIfInvalid("pipeline config", config.validate());
+  map_ = makeMap(placedVolume(config));
+  budget_ = makeBudget(config, map_->type());
+  integrator_ = std::make_unique<Integrator>(config.integrator);
+  tracker_ = std::make_unique<Tracker>(config.tracker);
+}
+
+void SdfPipeline::clearMap() {
+  map_->clear();
+  if (budget_) budget_->clear();
+  map_initialised_ = false;
+  consecutive_failures_ = 0;
+}
+
+void SdfPipeline::reset() {
+  clearMap();
+  T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
+  motion_.clear();
+}
+
+void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map) {
+  if (!map) throw std::invalid_argument("setMap: no map");
+  map_ = std::move(map);
+  config_.volume = map_->config();
+  budget_ = makeBudget(config_, map_->type());
+  T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
+  map_initialised_ = true;
+  consecutive_failures_ = 0;
+  motion_.clear();
+}
+
+void SdfPipeline::updateConfig(const PipelineConfig& candidate) {
+  throwIfInvalid("pipeline config", candidate.validate());
+  if (!candidate.volume.sameLattice(config_.volume) ||
+      candidate.initial_camera_in_grid != config_.initial_camera_in_grid ||
+      candidate.max_map_memory_mb != config_.max_map_memory_mb || candidate.swap_directory != config_.swap_directory) {
+    throw std::invalid_argument(
+        "the grid (size, cell size, positive truncation, voxel storage, placement, memory bound) cannot change live");
+  }
+  integrator_ = std::make_unique<Integrator>(candidate.integrator);
+  tracker_ = std::make_unique<Tracker>(candidate.tracker);
+  if (candidate.max_prediction_gap_s != config_.max_prediction_gap_s) motion_ = MotionModel(candidate.max_prediction_gap_s);
+  config_ = candidate;
+}
+
+DepthImage SdfPipeline::prepareDepth(const DepthImage& depth, const PinholeCamera& camera) {
+  DepthImage filtered;
+  if (camera.distortion.isZero()) {
+    filtered = depth;
+  } else {
+    if (!undistortion_ || undistortion_->camera() != camera) undistortion_.emplace(camera);
+    filtered = undistortion_->apply(depth);
+  }
+  const float lo = static_cast<float>(config_.min_depth_m), hi = static_cast<float>(config_.max_depth_m);
+  float* z = filtered.data();
+  const size_t n = static_cast<size_t>(filtered.width()) * filtered.height();
+  for (size_t i = 0; i < n; ++i) {
+    if (!(z[i] >= lo && z[i] <= hi)) z[i] = 0.0f;  // NaN fails both comparisons
+  }
+  return filtered;
+}
+
+Eigen::Isometry3d SdfPipeline::predictPose(double timestamp_s) const {
+  if (!config_.predict_motion || consecutive_failures_ > 0) return T_W_C_;
+  return motion_.predict(timestamp_s);
+}
+
+void SdfPipeline::restoreNear(const Eigen::Isometry3d& T_W_C, const PinholeCamera& camera, float furthest_m,
+                              FrameReport* report) {
+  if (!budget_ || budget_->swap().size() == 0) return;
+  auto& sparse = static_cast<SparseTsdfMap&>(*map_);
+  try {
+    report->blocks_swapped_in +=
+        budget_->restore(&sparse, blocksNearView(sparse, camera, T_W_C, furthest_m, config_.tracker.max_translation_m));
+  } catch (const std::runtime_error& e) {
+    report->swap_error = e.what();
+  }
+}
+
+void SdfPipeline::evictAwayFrom(const Eigen::Isometry3d& T_W_C, const PinholeCamera& camera, float furthest_m,
+                                FrameReport* report) {
+  if (!budget_) return;
+  auto& sparse = static_cast<SparseTsdfMap&>(*map_);
+  const BlockBox keep = blocksNearView(sparse, camera, T_W_C, furthest_m, config_.tracker.max_translation_m);
+  if (keep.empty()) return;  // the view left the map's reach: nothing to go by
+  try {
+    report->blocks_swapped_out += budget_->evict(&sparse, keep, T_W_C.translation().cast<float>());
+    report->swap_notice = budget_->takeStartNotice();
+    report->swap_warning = budget_->takeOverrunWarning(sparse);
+  } catch (const std::runtime_error& e) {
+    report->swap_error = e.what();
+  }
+}
+
+std::unique_ptr<TsdfMap> SdfPipeline::copyWholeMap() const {
+  if (!budget_ || budget_->swap().size() == 0) return map_->clone();
+  return std::make_unique<SparseTsdfMap>(budget_->whole(static_cast<const SparseTsdfMap&>(*map_)));
+}
+
+FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s) {
+  return process(depth, camera, timestamp_s, std::nullopt);
+}
+
+FrameReport SdfPipeline::processFrameAtPose(const DepthImage& depth, const PinholeCamera& camera,
+                                            const Eigen::Isometry3d& T_W_C, double timestamp_s) {
+  return process(depth, camera, timestamp_s, T_W_C);
+}
+
+FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s,
+                                 const std::optional<Eigen::Isometry3d>& given_T_W_C) {
+  FrameReport report;
+  report.track.T_W_C = T_W_C_;
+  const std::string mismatch = camera.sizeMismatch(depth.width(), depth.height());
+  if (!mismatch.empty() || depth.empty()) {
+    report.track.status = TrackStatus::kBadInput;
+    report.track.message = mismatch.empty() ? "the depth image is empty" : mismatch;
+    return report;
+  }
+  const DepthImage filtered = prepareDepth(depth, camera);
+  const PinholeCamera ideal_camera = camera.withoutDistortion();  // the camera of the prepared image
+  if (filtered.countMeasurements() == 0) {
+    report.track.status = TrackStatus::kBadInput;
+    report.track.message = "no pixel holds a depth within [" + std::to_string(config_.min_depth_m) + ", " +
+                           std::to_string(config_.max_depth_m) + "] m";
+    return report;
+  }
+
+  const float furthest_m = budget_ ? filtered.maxMeasurement() : 0.0f;  // only swapping needs it
+
+  if (config_.reset_after_failures > 0 && consecutive_failures_ >= config_.reset_after_failures) {
+    clearMap();
+    T_W_C_last_fused_ = T_W_C_;  // the new map starts where the camera was last
+    report.reset = true;
+  }
+
+  if (!map_initialised_) {
+    if (given_T_W_C) T_W_C_ = T_W_C_last_fused_ = *given_T_W_C;
+    report.track.status = TrackStatus::kOk;
+    report.track.T_W_C = T_W_C_;
+    report.track.message = "first frame: map initialised at the start pose";
+    report.initialised_map = true;
+  } else {
+    const auto start = std::chrono::steady_clock::now();
+    const Eigen::Isometry3d predicted = given_T_W_C ? *given_T_W_C : predictPose(timestamp_s);
+    // Swapped blocks the frame may see come back first; the held pose's too, for the retry below.
+    restoreNear(predicted, ideal_camera, furthest_m, &report);
+    restoreNear(T_W_C_, ideal_camera, furthest_m, &report);
+    report.track = tracker_->track(filtered, ideal_camera, *map_, predicted);
+    if (!given_T_W_C && !report.track.tracked() && !predicted.isApprox(T_W_C_)) {
+      // The prediction may have led astray (the camera stopped or turned): try from the last pose.
+      TrackResult from_last = tracker_->track(filtered, ideal_camera, *map_, T_W_C_);
+      if (from_last.tracked()) report.track = std::move(from_last);
+    }
+    report.tracking_ms = millisecondsSince(start);
+    if (given_T_W_C) {
+      T_W_C_ = *given_T_W_C;  // the estimate is reported; the given pose is fused
+    } else if (report.track.pose_estimated) {
+      T_W_C_ = report.track.T_W_C;
+    }
+    if (!given_T_W_C && !report.track.tracked()) {
+      ++consecutive_failures_;
+      motion_.clear();
+      return report;  // never fuse on a failed frame
+    }
+    consecutive_failures_ = 0;
+  }
+  motion_.addTracked(timestamp_s, T_W_C_);
+
+  const Eigen::Isometry3d motion = T_W_C_last_fused_.inverse() * T_W_C_;
+  const double change = std::hypot(motion.translation().norm(), rotationAngle(motion));
+  if (report.initialised_map || change >= config_.min_pose_change_to_fuse) {
+    const auto start = std::chrono::steady_clock::now();
+    // Fusion must find every block of its view in memory: a swapped one would be made anew.
+    restoreNear(T_W_C_, ideal_camera, furthest_m, &report);
+    integrator_->integrate(filtered, ideal_camera, T_W_C_, map_.get());
+    evictAwayFrom(T_W_C_, ideal_camera, furthest_m, &report);
+    report.fusion_ms = millisecondsSince(start);
+    report.fused = true;
+    T_W_C_last_fused_ = T_W_C_;
+    map_initialised_ = true;
+  }
+  return report;
+}
+
+}  // namespace sdf_tracker

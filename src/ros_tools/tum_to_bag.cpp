@@ -1,0 +1,234 @@
+// tum_to_bag: converts a TUM-layout folder into a rosbag shaped like the TUM RGB-D benchmark's own
+// bags of 2011, so the ROS workflow can be tried and tested exactly as with a downloaded bag.
+//   rosrun sdf_tracker tum_to_bag SEQUENCE_DIR OUT.bag [--frames N] [--openni-default-intrinsics]
+// As in the benchmark's bags:
+//   /camera/depth/image (32FC1 metres, NaN = no data) + /camera/depth/camera_info,
+//   frame "/openni_depth_optical_frame" (with its leading slash);
+//   /tf as the legacy tf/tfMessage: the ground truth /world -> /kinect at its own rate (when the
+//   folder has groundtruth.txt), and the rigid openni chain /kinect -> /openni_camera ->
+//   /openni_depth_frame -> /openni_depth_optical_frame (and its openni_rgb_* twin) at 30 Hz;
+//   nothing on /tf_static;
+//   /camera/rgb/image_color (rgb8) + /camera/rgb/camera_info when the folder has rgb.txt, and
+//   /imu when it has accelerometer.txt ("timestamp ax ay az", m/s^2, in the depth camera's frame).
+// camera_info holds the sequence's intrinsics; with --openni-default-intrinsics it holds what the
+// benchmark's own bags are expected to hold instead (inferred from the driver, not checked on one):
+// the OpenNI driver's default (fx = fy = 525, the image centre, D all zero), which is not the
+// camera's calibration (the node's ~tum_camera gives that).
+// The bag is written to a temporary file and renamed when complete: a failure leaves no bag.
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include <geometry_msgs/TransformStamped.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <rosbag/bag.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Imu.h>
+#include <sensor_msgs/image_encodings.h>
+#include <tf/tfMessage.h>
+
+#include "sdf_tracker/cli/command_line.h"
+#include "sdf_tracker/devices/recording.h"
+#include "sdf_tracker/io/tum_sequence.h"
+#include "sdf_tracker/pipeline/parameters.h"
+#include "sdf_tracker/ros/conversions.h"
+
+namespace {
+
+namespace st = sdf_tracker;
+
+constexpr const char* kUsage = "usage: tum_to_bag SEQUENCE_DIR OUT.bag [--frames N] [--openni-default-intrinsics]";
+constexpr double kChainRate_hz = 30.0;  ///< as the openni driver re-published its static frames
+
+/// A link of the openni chain: parent, child, transform parent <- child.
+struct Link {
+  std::string parent;
+  std::string child;
+  Eigen::Isometry3d T_parent_child;
+};
+
+Eigen::Isometry3d translation(double x, double y, double z) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(x, y, z);
+  return T;
+}
+
+/// Body frame (x forward, y left, z up) <- optical frame (x right, y down, z forward).
+Eigen::Isometry3d bodyFromOptical() {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  return T;
+}
+
+/// The openni driver's frames, as in the benchmark's bags: depth and colour cameras 2.5 cm apart.
+std::vector<Link> openniChain() {
+  return {{"/kinect", "/openni_camera", Eigen::Isometry3d::Identity()},
+          {"/openni_camera", "/openni_depth_frame", translation(0.0, -0.02, 0.0)},
+          {"/openni_depth_frame", "/openni_depth_optical_frame", bodyFromOptical()},
+          {"/openni_camera", "/openni_rgb_frame", translation(0.0, -0.045, 0.0)},
+          {"/openni_rgb_frame", "/openni_rgb_optical_frame", bodyFromOptical()}};
+}
+
+/// /kinect <- /openni_depth_optical_frame through the chain.
+Eigen::Isometry3d kinectFromDepthOptical(const std::vector<Link>& chain) {
+  return chain[0].T_parent_child * chain[1].T_parent_child * chain[2].T_parent_child;
+}
+
+geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T, const ros::Time& stamp,
+                                            const std::string& parent, const std::string& child) {
+  geometry_msgs::TransformStamped tf;
+  tf.header.stamp = stamp;
+  tf.header.frame_id = parent;
+  tf.child_frame_id = child;
+  const geometry_msgs::Pose pose = sdf_tracker_ros::toPoseMsg(T);
+  tf.transform.translation.x = pose.position.x;
+  tf.transform.translation.y = pose.position.y;
+  tf.transform.translation.z = pose.position.z;
+  tf.transform.rotation = pose.orientation;
+  return tf;
+}
+
+/// "timestamp rest..." lines of an optional TUM list file ('#' comments); empty if it is absent.
+std::vector<std::pair<double, std::string>> readTimedLines(const std::string& path) {
+  std::vector<std::pair<double, std::string>> lines;
+  std::ifstream in(path);
+  if (!in) return lines;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    double t;
+    std::string rest;
+    if (!(fields >> t) || !std::isfinite(t)) {
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": expected a timestamp, got \"" + line + "\"");
+    }
+    std::getline(fields >> std::ws, rest);
+    lines.emplace_back(t, rest);
+  }
+  return lines;
+}
+
+sensor_msgs::Image readColourImage(const std::string& path, const std_msgs::Header& header) {
+  const cv::Mat bgr = cv::imread(path, cv::IMREAD_COLOR);
+  if (bgr.empty()) throw std::runtime_error("cannot read the colour image " + path);
+  cv::Mat rgb;
+  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  sensor_msgs::Image msg;
+  msg.header = header;
+  msg.width = static_cast<uint32_t>(rgb.cols);
+  msg.height = static_cast<uint32_t>(rgb.rows);
+  msg.encoding = sensor_msgs::image_encodings::RGB8;
+  msg.step = msg.width * 3;
+  msg.data.resize(static_cast<size_t>(msg.step) * msg.height);
+  for (int v = 0; v < rgb.rows; ++v) std::copy(rgb.ptr<uint8_t>(v), rgb.ptr<uint8_t>(v) + msg.step, &msg.data[v * msg.step]);
+  return msg;
+}
+
+int run(int argc, char** argv) {
+  const st::tools::CommandLine args(argc, argv, {"frames"}, {"help", "openni-default-intrinsics"},
+                                    {"SEQUENCE_DIR", "OUT.bag"});
+  if (args.has("help")) {
+    std::cout << kUsage << "\n";
+    return 0;
+  }
+  const st::TumSequence sequence = st::tools::openSequence(args);
+  const std::string out = args.positional(1);
+  const std::string temporary = out + ".partial";
+
+  const double offset_s = st::devices::rosStampOffset(sequence);
+  const double t_end = sequence.timestamp(sequence.size() - 1);
+  const std::vector<Link> chain = openniChain();
+  const Eigen::Isometry3d T_depth_kinect = kinectFromDepthOptical(chain).inverse();
+  const auto& gt = sequence.groundTruth();
+  const auto colour = readTimedLines(args.positional(0) + "/rgb.txt");
+  const auto accelerometer = readTimedLines(args.positional(0) + "/accelerometer.txt");
+  // What camera_info says about an image of the given size.
+  auto recordedCamera = [&](int width, int height) {
+    if (args.has("openni-default-intrinsics")) return st::PinholeCamera::openNiDefault(width, height);
+    st::PinholeCamera camera = sequence.camera();
+    camera.width = width, camera.height = height;
+    return camera;
+  };
+
+  try {
+    rosbag::Bag bag(temporary, rosbag::bagmode::Write);
+    auto stamp = [offset_s](double t) { return ros::Time(t + offset_s); };
+    // Every stream in time order up to each depth frame, so playback interleaves them as recorded.
+    size_t gt_index = 0, colour_index = 0, accel_index = 0;
+    double next_chain_s = std::min(sequence.timestamp(0), gt.empty() ? sequence.timestamp(0) : gt.front().timestamp_s);
+    auto writeUpTo = [&](double until_s) {
+      while (gt_index < gt.size() && gt[gt_index].timestamp_s <= until_s) {
+        tf::tfMessage tf;
+        const ros::Time t = stamp(gt[gt_index].timestamp_s);
+        tf.transforms.push_back(toTransform(gt[gt_index].T_W_C * T_depth_kinect, t, "/world", "/kinect"));
+        bag.write("/tf", t, tf);
+        ++gt_index;
+      }
+      while (next_chain_s <= until_s) {
+        tf::tfMessage tf;
+        const ros::Time t = stamp(next_chain_s);
+        for (const Link& link : chain) tf.transforms.push_back(toTransform(link.T_parent_child, t, link.parent, link.child));
+        bag.write("/tf", t, tf);
+        next_chain_s += 1.0 / kChainRate_hz;
+      }
+      while (accel_index < accelerometer.size() && accelerometer[accel_index].first <= until_s) {
+        std::istringstream fields(accelerometer[accel_index].second);
+        sensor_msgs::Imu imu;
+        imu.header.stamp = stamp(accelerometer[accel_index].first);
+        imu.header.frame_id = "/openni_depth_optical_frame";
+        imu.orientation_covariance[0] = -1.0;  // no orientation
+        imu.angular_velocity_covariance[0] = -1.0;
+        if (!(fields >> imu.linear_acceleration.x >> imu.linear_acceleration.y >> imu.linear_acceleration.z)) {
+          throw std::runtime_error(args.positional(0) + "/accelerometer.txt: expected \"timestamp ax ay az\"");
+        }
+        bag.write("/imu", imu.header.stamp, imu);
+        ++accel_index;
+      }
+      while (colour_index < colour.size() && colour[colour_index].first <= until_s) {
+        std_msgs::Header header;
+        header.seq = static_cast<uint32_t>(colour_index);
+        header.stamp = stamp(colour[colour_index].first);
+        header.frame_id = "/openni_rgb_optical_frame";
+        const sensor_msgs::Image image =
+            readColourImage(args.positional(0) + "/" + colour[colour_index].second, header);
+        const st::PinholeCamera camera = recordedCamera(static_cast<int>(image.width), static_cast<int>(image.height));
+        bag.write("/camera/rgb/image_color", header.stamp, image);
+        bag.write("/camera/rgb/camera_info", header.stamp, sdf_tracker_ros::toCameraInfo(camera, header));
+        ++colour_index;
+      }
+    };
+    for (size_t i = 0; i < sequence.size(); ++i) {
+      writeUpTo(sequence.timestamp(i));
+      std_msgs::Header header;
+      header.seq = static_cast<uint32_t>(i);
+      header.stamp = stamp(sequence.timestamp(i));
+      header.frame_id = "/openni_depth_optical_frame";
+      bag.write("/camera/depth/image", header.stamp, sdf_tracker_ros::toImageMsg(sequence.depth(i), header));
+      const st::PinholeCamera camera = recordedCamera(sequence.camera().width, sequence.camera().height);
+      bag.write("/camera/depth/camera_info", header.stamp, sdf_tracker_ros::toCameraInfo(camera, header));
+    }
+    writeUpTo(t_end + 0.1);  // the ground truth and chain just past the last frame
+    bag.close();
+  } catch (...) {
+    std::remove(temporary.c_str());
+    throw;
+  }
+  if (std::rename(temporary.c_str(), out.c_str()) != 0) {
+    std::remove(temporary.c_str());
+    throw std::runtime_error("cannot move the finished bag to " + out);
+  }
+  std::cout << "wrote " << sequence.size() << " frames to " << out;
+  if (offset_s != 0.0) std::cout << " (stamps shifted by " << offset_s << " s)";
+  std::cout << "\n";
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return sdf_tracker::tools::runTool("tum_to_bag", run, argc, argv); }

@@ -1,0 +1,306 @@
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <set>
+
+#include <cmath>
+#include <cstring>
+
+#include <sensor_msgs/image_encodings.h>
+
+#include "sdf_tracker/SdfTrackerConfig.h"
+#include "sdf_tracker/map/block_swap.h"
+#include "sdf_tracker/map/sparse_tsdf_map.h"
+#include "sdf_tracker/pipeline/parameters.h"
+#include "sdf_tracker/ros/conversions.h"
+#include "sdf_tracker/ros/map_publisher.h"
+#include "sdf_tracker/ros/parameters.h"
+#include "sdf_tracker/ros/pose_broadcaster.h"
+
+namespace sdf_tracker_ros {
+namespace {
+
+sensor_msgs::Image millimetreImage(uint32_t width, uint32_t height, uint16_t value) {
+  sensor_msgs::Image msg;
+  msg.width = width;
+  msg.height = height;
+  msg.encoding = sensor_msgs::image_encodings::TYPE_16UC1;
+  msg.step = width * 2;
+  msg.data.resize(msg.step * height);
+  for (size_t i = 0; i < static_cast<size_t>(width) * height; ++i) std::memcpy(&msg.data[2 * i], &value, 2);
+  return msg;
+}
+
+TEST(Conversions, MillimetresAndMetresGiveTheSameDepth) {
+  const sdf_tracker::DepthImage mm = toDepthImage(millimetreImage(4, 3, 1234));
+  EXPECT_FLOAT_EQ(mm.at(3, 2), 1.234f);
+  std_msgs::Header header;
+  header.frame_id = "cam";
+  const sensor_msgs::Image metres = toImageMsg(mm, header);
+  EXPECT_EQ(metres.encoding, sensor_msgs::image_encodings::TYPE_32FC1);
+  EXPECT_EQ(metres.header.frame_id, "cam");
+  EXPECT_FLOAT_EQ(toDepthImage(metres).at(1, 1), 1.234f);
+}
+
+TEST(Conversions, ZeroAndNaNAreNoMeasurement) {
+  const sdf_tracker::DepthImage zero = toDepthImage(millimetreImage(2, 2, 0));
+  EXPECT_EQ(zero.countMeasurements(), 0);
+  sdf_tracker::DepthImage nan(2, 2, std::nanf(""));
+  EXPECT_EQ(toDepthImage(toImageMsg(nan, std_msgs::Header())).countMeasurements(), 0);
+}
+
+TEST(Conversions, UnreadableImagesNameTheProblem) {
+  sensor_msgs::Image colour = millimetreImage(4, 3, 1);
+  colour.encoding = "rgb8";
+  try {
+    toDepthImage(colour);
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("rgb8"), std::string::npos);
+  }
+  sensor_msgs::Image short_data = millimetreImage(4, 3, 1);
+  short_data.data.resize(5);
+  EXPECT_THROW(toDepthImage(short_data), std::invalid_argument);
+  sensor_msgs::CameraInfo info;
+  info.width = 640;
+  info.height = 480;  // K all zero: an uncalibrated camera
+  EXPECT_THROW(toCamera(info), std::invalid_argument);
+  info.K = {525, 0, 319.5, 0, 525, 239.5, 0, 0, 1};
+  EXPECT_DOUBLE_EQ(toCamera(info).cx, 319.5);
+}
+
+TEST(Conversions, CameraInfoRoundTripsThroughTheCamera) {
+  sdf_tracker::PinholeCamera camera = sdf_tracker::PinholeCamera::tumFreiburg1();
+  camera.distortion = {0.1, -0.2, 0.001, -0.002, 0.3};
+  std_msgs::Header header;
+  header.frame_id = "camera_depth_optical_frame";
+  const sensor_msgs::CameraInfo info = toCameraInfo(camera, header);
+  EXPECT_EQ(info.header.frame_id, "camera_depth_optical_frame");
+  EXPECT_EQ(info.distortion_model, "plumb_bob");
+  EXPECT_EQ(info.P[2], camera.cx);
+  const sdf_tracker::PinholeCamera back = toCamera(info);
+  EXPECT_EQ(back.width, camera.width);
+  EXPECT_EQ(back.height, camera.height);
+  EXPECT_DOUBLE_EQ(back.fx, camera.fx);
+  EXPECT_DOUBLE_EQ(back.fy, camera.fy);
+  EXPECT_DOUBLE_EQ(back.cx, camera.cx);
+  EXPECT_DOUBLE_EQ(back.cy, camera.cy);
+  EXPECT_EQ(back.distortion, camera.distortion);
+}
+
+TEST(Conversions, ATumCameraReplacesTheBagsDriverDefaultCameraInfo) {
+  // What the benchmark's bags of 2011 carry: the OpenNI driver's default, stamped in Unix time.
+  std_msgs::Header header;
+  header.stamp = ros::Time(1305031102.16);
+  const sensor_msgs::CameraInfo recorded = toCameraInfo(sdf_tracker::PinholeCamera::openNiDefault(640, 480), header);
+  EXPECT_TRUE(holdsOpenNiDefault(recorded));
+  const double stamp_s = header.stamp.toSec();
+  std::string source;
+
+  const sdf_tracker::PinholeCamera as_recorded =
+      trackingCamera(recorded, "/camera/depth/camera_info", "", stamp_s, &source);
+  EXPECT_EQ(as_recorded, sdf_tracker::PinholeCamera::openNiDefault(640, 480)) << "no TUM camera: camera_info as it is";
+  EXPECT_EQ(source, "/camera/depth/camera_info");
+
+  const sdf_tracker::PinholeCamera freiburg1 =
+      trackingCamera(recorded, "/camera/depth/camera_info", "freiburg1", stamp_s, &source);
+  EXPECT_EQ(freiburg1, *sdf_tracker::PinholeCamera::tumCamera("freiburg1")) << "intrinsics and distortion";
+  EXPECT_FALSE(freiburg1.distortion.isZero());
+  EXPECT_NE(source.find("~tum_camera freiburg1"), std::string::npos) << source;
+
+  // camera_info that states TUM's freiburg1 intrinsics and D all zero gets TUM's distortion too.
+  const sensor_msgs::CameraInfo stated = toCameraInfo(sdf_tracker::PinholeCamera::tumFreiburg1(), header);
+  EXPECT_FALSE(holdsOpenNiDefault(stated));
+  EXPECT_EQ(trackingCamera(stated, "/camera/depth/camera_info", "", stamp_s, &source), freiburg1);
+
+  auto refusal = [&](const sensor_msgs::CameraInfo& info, const std::string& tum_camera) -> std::string {
+    try {
+      trackingCamera(info, "/camera/depth/camera_info", tum_camera, stamp_s, &source);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  const sensor_msgs::CameraInfo qvga = toCameraInfo(sdf_tracker::PinholeCamera::openNiDefault(320, 240), header);
+  EXPECT_TRUE(holdsOpenNiDefault(qvga));
+  EXPECT_EQ(refusal(qvga, "freiburg1"), "~tum_camera freiburg1: depth image is 320x240 but the camera is 640x480");
+  EXPECT_EQ(refusal(recorded, "freiburg4"),
+            "tum_camera must be one of freiburg1, freiburg2, freiburg3, or empty for camera_info's calibration "
+            "(got \"freiburg4\")");
+}
+
+TEST(Conversions, CameraInfoDistortionThePipelineCannotRemoveIsRefusedByName) {
+  sensor_msgs::CameraInfo info = toCameraInfo(sdf_tracker::PinholeCamera(), std_msgs::Header());
+  info.distortion_model = "rational_polynomial";
+  info.D = {0.1, -0.2, 0.0, 0.0, 0.3, 0.0, 0.0, 0.0};
+  EXPECT_DOUBLE_EQ(toCamera(info).distortion.k3, 0.3) << "rational_polynomial without k4..k6 is plumb bob";
+  info.D[6] = 0.01;
+  auto refusal = [&]() -> std::string {
+    try {
+      toCamera(info);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  EXPECT_NE(refusal().find("k4..k6"), std::string::npos) << refusal();
+  info.distortion_model = "equidistant";
+  info.D = {0.1, 0.0, 0.0, 0.0};
+  EXPECT_NE(refusal().find("\"equidistant\""), std::string::npos) << refusal();
+  info.D = {0.0, 0.0, 0.0, 0.0};
+  EXPECT_TRUE(toCamera(info).distortion.isZero()) << "any model with zero coefficients is no distortion";
+  info.distortion_model = "plumb_bob";
+  info.D = {0.1, 0.2};
+  EXPECT_NE(refusal().find("needs 5"), std::string::npos) << refusal();
+  info.D.clear();
+  EXPECT_TRUE(toCamera(info).distortion.isZero()) << "no D at all";
+}
+
+TEST(Reconfigure, TheCfgListsExactlyTheLiveRowsOfTheTableWithTheirTypesAndDefaultsAndNoClampingRange) {
+  namespace st = sdf_tracker;
+  const st::Settings defaults = st::preset("default");
+  const sdf_tracker::SdfTrackerConfig cfg_defaults = sdf_tracker::SdfTrackerConfig::__getDefault__();
+  const sdf_tracker::SdfTrackerConfig cfg_min = sdf_tracker::SdfTrackerConfig::__getMin__();
+  const sdf_tracker::SdfTrackerConfig cfg_max = sdf_tracker::SdfTrackerConfig::__getMax__();
+  std::map<std::string, st::ParameterValue> cfg_default_values;
+  for (const auto& [name, value] : reconfigureValues(cfg_defaults)) cfg_default_values[name] = value;
+  std::map<std::string, st::ParameterValue> cfg_min_values, cfg_max_values;
+  for (const auto& [name, value] : reconfigureValues(cfg_min)) cfg_min_values[name] = value;
+  for (const auto& [name, value] : reconfigureValues(cfg_max)) cfg_max_values[name] = value;
+
+  std::set<std::string> in_cfg;
+  for (const auto& description : sdf_tracker::SdfTrackerConfig::__getParamDescriptions__()) {
+    in_cfg.insert(description->name);
+    const st::ParameterSpec* spec = st::findParameter(description->name);
+    ASSERT_NE(spec, nullptr) << description->name << " is in cfg/SdfTracker.cfg but not in the parameter table";
+    EXPECT_TRUE(spec->live) << description->name << " is reconfigurable but its table row says it is not live";
+    const std::string expected_type = spec->type == st::ParameterType::kText ? "str" : st::toString(spec->type);
+    EXPECT_EQ(description->type, expected_type) << description->name;
+    EXPECT_EQ(cfg_default_values.at(description->name), spec->defaults.of(st::Preset::kDefault))
+        << description->name << ": the cfg default differs from the table's default preset";
+    EXPECT_EQ(cfg_default_values.at(description->name), spec->get(defaults)) << description->name;
+    // dynamic_reconfigure clamps to min/max silently: the cfg must not bound what the table checks.
+    if (spec->type == st::ParameterType::kDouble) {
+      EXPECT_EQ(std::get<double>(cfg_min_values.at(description->name)), -std::numeric_limits<double>::infinity())
+          << description->name;
+      EXPECT_EQ(std::get<double>(cfg_max_values.at(description->name)), std::numeric_limits<double>::infinity())
+          << description->name;
+    } else if (spec->type == st::ParameterType::kInt) {
+      EXPECT_EQ(std::get<int>(cfg_min_values.at(description->name)), std::numeric_limits<int>::min()) << description->name;
+      EXPECT_EQ(std::get<int>(cfg_max_values.at(description->name)), std::numeric_limits<int>::max()) << description->name;
+    }
+  }
+  for (const st::ParameterSpec& spec : st::parameterTable()) {
+    EXPECT_EQ(in_cfg.count(spec.name) > 0, spec.live) << spec.name << (spec.live ? " is live but missing from the cfg"
+                                                                                    : " is in the cfg but not live");
+  }
+}
+
+TEST(Reconfigure, ValuesRoundTripAtFullPrecision) {
+  namespace st = sdf_tracker;
+  st::Settings settings = st::preset("default");
+  st::setParameter(&settings, "MaxWeight", 12345.678901234);
+  st::setParameter(&settings, "ConvergenceCondition", 1.234567891e-7);
+  st::Settings back = st::preset("default");
+  for (const auto& [name, value] : reconfigureValues(toReconfigureConfig(settings))) st::setParameter(&back, name, value);
+  EXPECT_EQ(back.pipeline.integrator.max_weight, 12345.678901234);
+  EXPECT_EQ(back.pipeline.tracker.convergence_threshold, 1.234567891e-7);
+}
+
+TEST(Frames, TheMapFrameHasRep103AxesAtTheFirstCameraPose) {
+  const Eigen::Isometry3d T_map_W = mapFromOpticalWorld();
+  // The camera looks along optical +z: that is map +x (forward); optical +x (right) is map -y;
+  // optical +y (down) is map -z.
+  EXPECT_TRUE((T_map_W.linear() * Eigen::Vector3d::UnitZ()).isApprox(Eigen::Vector3d::UnitX()));
+  EXPECT_TRUE((T_map_W.linear() * Eigen::Vector3d::UnitX()).isApprox(-Eigen::Vector3d::UnitY()));
+  EXPECT_TRUE((T_map_W.linear() * Eigen::Vector3d::UnitY()).isApprox(-Eigen::Vector3d::UnitZ()));
+  EXPECT_NEAR(T_map_W.linear().determinant(), 1.0, 1e-12);
+  // Gravity straight down the image (a level camera): the same frame.
+  EXPECT_TRUE(gravityAlignedMapFromOpticalWorld(-Eigen::Vector3d::UnitY()).isApprox(T_map_W));
+}
+
+TEST(Frames, GravityLevelsTheMapFrameAndKeepsTheViewingDirectionForward) {
+  // A camera pitched 30 degrees down: in its optical frame "up" leans towards -z.
+  const double pitch = 30.0 * M_PI / 180.0;
+  const Eigen::Vector3d up_W(0.0, -std::cos(pitch), -std::sin(pitch));
+  const Eigen::Isometry3d T_map_W = gravityAlignedMapFromOpticalWorld(up_W * 9.81);
+  EXPECT_TRUE((T_map_W.linear() * up_W).isApprox(Eigen::Vector3d::UnitZ())) << "map z is up";
+  const Eigen::Vector3d forward = T_map_W.linear() * Eigen::Vector3d::UnitZ();
+  EXPECT_NEAR(forward.y(), 0.0, 1e-12) << "no yaw";
+  EXPECT_GT(forward.x(), 0.0);
+  EXPECT_NEAR(std::atan2(-forward.z(), forward.x()), pitch, 1e-9) << "the camera looks 30 degrees down";
+  EXPECT_NEAR(T_map_W.linear().determinant(), 1.0, 1e-12);
+  EXPECT_THROW(gravityAlignedMapFromOpticalWorld(Eigen::Vector3d::Zero()), std::invalid_argument);
+}
+
+TEST(Frames, PosesRoundTripThroughMessages) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(0.1, -2.0, 3.5);
+  EXPECT_TRUE(fromPoseMsg(toPoseMsg(T)).isApprox(T, 1e-12));
+}
+
+TEST(Frames, LeadingSlashesAreStripped) {
+  EXPECT_EQ(stripSlash("/openni_depth_optical_frame"), "openni_depth_optical_frame");
+  EXPECT_EQ(stripSlash("//map"), "map");
+  EXPECT_EQ(stripSlash("base_link"), "base_link");
+  EXPECT_EQ(stripSlash("/"), "");
+}
+
+TEST(MapSnapshot, FollowsChangedBlocksAndNoticesAMapReplacedByAnotherOfTheSameGrid) {
+  sdf_tracker::VolumeConfig config;
+  config.type = sdf_tracker::MapType::kSparse;
+  std::mutex mutex;
+  std::unique_ptr<sdf_tracker::SparseTsdfMap> live = std::make_unique<sdf_tracker::SparseTsdfMap>(config);
+  MapSnapshot snapshot(mutex, [&live] { return live.get(); });
+  auto blocksOf = [](const sdf_tracker::TsdfMap* map) {
+    return static_cast<const sdf_tracker::SparseTsdfMap&>(*map).blockIndices();
+  };
+  const sdf_tracker::SparseTsdfMap::BlockIndex a(0, 0, 0), b(5, -1, 2);
+  EXPECT_TRUE(blocksOf(snapshot.update()).empty());
+  live->allocate(a).changed_at = live->beginRevision();
+  EXPECT_EQ(blocksOf(snapshot.update()), std::vector<sdf_tracker::SparseTsdfMap::BlockIndex>{a});
+  // A map of the same grid and revision loaded in its place (as ~load_volume does).
+  auto loaded = std::make_unique<sdf_tracker::SparseTsdfMap>(config);
+  loaded->allocate(b).changed_at = loaded->beginRevision();
+  live = std::move(loaded);
+  EXPECT_EQ(blocksOf(snapshot.update()), std::vector<sdf_tracker::SparseTsdfMap::BlockIndex>{b});
+}
+
+TEST(MapSnapshot, LetsGoOfTheBlocksTheLiveMapSwappedOutAndTakesThemBackWhenReadBack) {
+  using BlockIndex = sdf_tracker::SparseTsdfMap::BlockIndex;
+  sdf_tracker::VolumeConfig config;
+  config.type = sdf_tracker::MapType::kSparse;
+  std::mutex mutex;
+  sdf_tracker::SparseTsdfMap live(config);
+  MapSnapshot snapshot(mutex, [&live] { return &live; });
+  const BlockIndex near(0, 0, 0), far(40, 0, 0);
+  const uint64_t fused = live.beginRevision();
+  for (const BlockIndex& index : {near, far}) {
+    sdf_tracker::VoxelBlock& block = live.allocate(index);
+    block.voxels[7] = sdf_tracker::Voxel{0.01f, 3.0f};
+    block.changed_at = fused;
+  }
+  auto blocksOf = [](const sdf_tracker::TsdfMap* map) {
+    return static_cast<const sdf_tracker::SparseTsdfMap&>(*map).blockIndices();
+  };
+  ASSERT_EQ(blocksOf(snapshot.update()), (std::vector<BlockIndex>{near, far}));
+
+  // A budget of one byte swaps out every block but those around the camera.
+  sdf_tracker::MapMemoryBudget budget(1, ::testing::TempDir());
+  ASSERT_EQ(budget.evict(&live, sdf_tracker::BlockBox{near, near}, Eigen::Vector3f::Zero()), 1u);
+  EXPECT_EQ(blocksOf(snapshot.update()), std::vector<BlockIndex>{near}) << "the copy is bounded as the live map is";
+
+  ASSERT_EQ(budget.restore(&live, sdf_tracker::BlockBox{far, far}), 1u);
+  const auto* copy = static_cast<const sdf_tracker::SparseTsdfMap*>(snapshot.update());
+  EXPECT_EQ(blocksOf(copy), (std::vector<BlockIndex>{near, far}));
+  const sdf_tracker::Voxel back = copy->find(far)->voxels[7];
+  EXPECT_EQ(back.distance_m, 0.01f);
+  EXPECT_EQ(back.weight, 3.0f);
+}
+
+}  // namespace
+}  // namespace sdf_tracker_ros

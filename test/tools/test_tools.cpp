@@ -1,0 +1,288 @@
+// The command-line tools' contract with their user: exit codes, refused options, valid JSON, and
+// an output folder that never holds half-written or mixed results.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "sdf_tracker/cli/command_line.h"
+#include "sdf_tracker/cli/output_folder.h"
+#include "sdf_tracker/cli/report.h"
+#include "sdf_tracker/io/depth_png.h"
+#include "sdf_tracker/io/files.h"
+#include "sdf_tracker/io/trajectory_file.h"
+#include "sdf_tracker/io/vti_file.h"
+#include "sdf_tracker/sim/synthetic.h"
+#include "test_helpers.h"
+
+namespace sdf_tracker::tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ToolRun {
+  int exit_code;
+  std::string output;  ///< stdout and stderr
+};
+
+/// Runs `command` (already quoted for the shell), capturing stdout and stderr.
+ToolRun runCommand(const std::string& arguments) {
+  const std::string command = arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  ToolRun run{-1, ""};
+  char buffer[4096];
+  while (pipe && fgets(buffer, sizeof(buffer), pipe)) run.output += buffer;
+  const int status = pipe ? pclose(pipe) : -1;
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return run;
+}
+
+/// Runs the offline runner with `arguments` (already quoted for the shell).
+ToolRun offline(const std::string& arguments) {
+  return runCommand(std::string(SDF_TRACKER_OFFLINE) + " --quiet " + arguments);
+}
+
+/// Runs the offline runner on `sequence` with `arguments` and expects it to refuse them: exit
+/// code 1, and each of `said` in what it printed.
+void expectRefused(const std::string& sequence, const std::string& arguments, std::initializer_list<std::string> said) {
+  const ToolRun run = offline("--sequence " + sequence + " --output " + test::scratchDirectory("refused") + " " + arguments);
+  EXPECT_EQ(run.exit_code, 1) << arguments << ":\n" << run.output;
+  for (const std::string& text : said) EXPECT_NE(run.output.find(text), std::string::npos) << run.output;
+}
+
+/// A short synthetic QVGA sequence with ground truth.
+std::string shortSequence(int frames) {
+  const std::string dir = test::scratchDirectory("cli_sequence");
+  synthetic::SequenceSpec spec;
+  spec.frames = frames;
+  spec.camera = test::testCamera();
+  synthetic::writeSequence(dir, spec);
+  return dir;
+}
+
+TEST(Json, StringsAreEscapedAndNonFiniteNumbersAreNull) {
+  EXPECT_EQ(jsonString("a\tb\"c\\d\n"), "\"a\\u0009b\\\"c\\\\d\\u000a\"");
+  EXPECT_EQ(jsonNumber(0.25), "0.25");
+  EXPECT_EQ(jsonNumber(std::numeric_limits<double>::infinity()), "null");
+  EXPECT_EQ(jsonNumber(std::nan("")), "null");
+}
+
+TEST(CommandLine, WholeNumbersBeyondIntAreRefused) {
+  const char* argv[] = {"tool", "--frames", "1e10"};
+  const CommandLine args(3, const_cast<char**>(argv), {"frames"}, {});
+  EXPECT_THROW(args.getInt("frames", 0), std::invalid_argument);
+}
+
+TEST(OutputFolder, ResultsAppearOnlyOnCommitAndReplaceThePreviousRunsWhole) {
+  const std::string dir = test::scratchDirectory("output_folder");
+  {
+    OutputFolder first(dir, {"a.txt", "b.txt", "summary.txt"});
+    io::writeTextFile(first.path("a.txt"), "first a");
+    io::writeTextFile(first.path("b.txt"), "first b");
+    io::writeTextFile(first.path("summary.txt"), "first summary");
+    EXPECT_FALSE(fs::exists(dir + "/a.txt")) << "nothing in place before commit";
+    first.commit({"summary.txt"});
+  }
+  {
+    // A run killed (or failing) before it commits leaves the previous results as they were.
+    OutputFolder failing(dir, {"a.txt", "b.txt", "summary.txt"});
+    io::writeTextFile(failing.path("a.txt"), "half-done");
+  }
+  std::ifstream a(dir + "/a.txt");
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(a), {}), "first a");
+  {
+    OutputFolder second(dir, {"a.txt", "b.txt", "summary.txt"});
+    io::writeTextFile(second.path("a.txt"), "second a");
+    io::writeTextFile(second.path("summary.txt"), "second summary");
+    second.commit({"summary.txt"});
+  }
+  EXPECT_FALSE(fs::exists(dir + "/b.txt")) << "a result of the previous run that this one did not write";
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    EXPECT_TRUE(entry.path().filename() == "a.txt" || entry.path().filename() == "summary.txt") << entry.path();
+  }
+}
+
+TEST(OutputFolder, StagingFoldersOfKilledRunsAreRemovedAtTheNextStart) {
+  const std::string dir = test::scratchDirectory("output_stale");
+  const std::string stale = dir + "/.sdf_tracker_staging-2147483000";  // no such process
+  fs::create_directories(stale);
+  io::writeTextFile(stale + "/mesh.ply.tmp", std::string(1000, 'x'));
+  OutputFolder next(dir, {"mesh.ply"});
+  EXPECT_FALSE(fs::exists(stale));
+}
+
+TEST(Offline, AnEmptyOutputFolderIsRefusedAndNothingIsWritten) {
+  const std::string sequence = shortSequence(3);
+  const ToolRun run = offline("--sequence " + sequence + " --output ''");
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.output.find("--output must name a folder"), std::string::npos) << run.output;
+  EXPECT_FALSE(fs::exists("/trajectory.txt"));
+}
+
+TEST(Offline, AbsurdThreadCountsAreRefusedWithTheLimit) {
+  const ToolRun run = offline("--sequence " + shortSequence(3) + " --output " + test::scratchDirectory("o") +
+                          " --threads 100000");
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.output.find("--threads must be in [1, "), std::string::npos) << run.output;
+}
+
+TEST(Offline, NodeOnlyParametersAreRefusedNotIgnored) {
+  const ToolRun run = offline("--sequence " + shortSequence(3) + " --output " + test::scratchDirectory("o") +
+                          " --param FocalLengthX=-5 --param ImageWidth=123");
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.output.find("FocalLengthX: read by the ROS node only"), std::string::npos) << run.output;
+}
+
+TEST(Offline, FuseGroundTruthMeasuresTheTrackerAloneAndNeedsGroundTruth) {
+  const std::string sequence = shortSequence(8);
+  const std::string out = test::scratchDirectory("fuse_gt");
+  const ToolRun run = offline("--sequence " + sequence + " --output " + out + " --fuse-ground-truth");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  // Exact ground truth and a desk scene that constrains every direction: no frame is off by 1 cm.
+  EXPECT_NE(run.output.find("tracker alone (--fuse-ground-truth): translation error per frame (mm) mean "),
+            std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("over 1 cm: 0 of 7 frames"), std::string::npos) << run.output;
+  std::ifstream json(out + "/summary.json");
+  const std::string summary((std::istreambuf_iterator<char>(json)), std::istreambuf_iterator<char>());
+  EXPECT_NE(summary.find("\"single_frame_error_m\""), std::string::npos) << summary;
+
+  fs::remove(sequence + "/groundtruth.txt");
+  expectRefused(sequence, "--fuse-ground-truth", {"--fuse-ground-truth needs the sequence's groundtruth.txt"});
+}
+
+TEST(Offline, TooFewFramesForAccuracyStillSucceedWithASummary) {
+  const std::string out = test::scratchDirectory("few");
+  const ToolRun run = offline("--sequence " + shortSequence(5) + " --output " + out + " --frames 2");
+  EXPECT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("accuracy not evaluated"), std::string::npos) << run.output;
+  EXPECT_TRUE(fs::exists(out + "/summary.json"));
+}
+
+TEST(Offline, ARunInWhichNoFrameCouldBeTrackedFails) {
+  // Every frame after the first holds no depth at all.
+  const std::string sequence = shortSequence(3);
+  const DepthImage empty(test::testCamera().width, test::testCamera().height, 0.0f);
+  std::ifstream list(sequence + "/depth.txt");
+  std::string line;
+  int frame = 0;
+  while (std::getline(list, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    if (frame++ > 0) io::writeDepthPng(sequence + "/" + line.substr(line.find(' ') + 1), empty, 5000.0);
+  }
+  const ToolRun run = offline("--sequence " + sequence + " --output " + test::scratchDirectory("none"));
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("no frame could be tracked"), std::string::npos) << run.output;
+}
+
+TEST(Offline, ASavedMapIsLoadedByTheNextRunAndACorruptOneIsRefusedByName) {
+  const std::string sequence = shortSequence(6);
+  const std::string first = test::scratchDirectory("save_map");
+  const ToolRun mapping =
+      offline("--sequence " + sequence + " --output " + first + " --save-map --param MapType=sparse");
+  ASSERT_EQ(mapping.exit_code, 0) << mapping.output;
+  ASSERT_TRUE(fs::exists(first + "/map.sdfmap"));
+  const ToolRun reuse = offline("--sequence " + sequence + " --output " + test::scratchDirectory("load_map") +
+                                " --load-volume " + first + "/map.sdfmap");
+  EXPECT_EQ(reuse.exit_code, 0) << reuse.output;
+  EXPECT_NE(reuse.output.find("sparse map of 0.02 m voxels"), std::string::npos)
+      << "the file's storage replaces the configured dense grid:\n" << reuse.output;
+  EXPECT_NE(reuse.output.find("tracked ok 6"), std::string::npos) << "the first frame too is tracked in it:\n"
+                                                                  << reuse.output;
+
+  fs::resize_file(first + "/map.sdfmap", fs::file_size(first + "/map.sdfmap") - 10);
+  const ToolRun corrupt = offline("--sequence " + sequence + " --output " + test::scratchDirectory("bad_map") +
+                                  " --load-volume " + first + "/map.sdfmap");
+  EXPECT_EQ(corrupt.exit_code, 1) << corrupt.output;
+  EXPECT_NE(corrupt.output.find(first + "/map.sdfmap: its header lists"), std::string::npos) << corrupt.output;
+}
+
+TEST(Offline, AMemoryBoundIsReportedAndRefusedWhereItCannotHold) {
+  const std::string sequence = shortSequence(4);
+  const ToolRun bounded = offline("--sequence " + sequence + " --output " + test::scratchDirectory("bound") +
+                                  " --param MapType=sparse --param MaxMemoryMB=0.5");
+  EXPECT_EQ(bounded.exit_code, 0) << bounded.output;
+  EXPECT_NE(bounded.output.find("(MaxMemoryMB 0.50; 0 blocks"), std::string::npos) << bounded.output;
+  // Four frames of one view: every block is near the camera, none can go, and the user hears so once.
+  const std::string overrun = "warning: the map holds ";
+  const size_t warned_at = bounded.output.find(overrun);
+  ASSERT_NE(warned_at, std::string::npos) << bounded.output;
+  EXPECT_NE(bounded.output.find("above MaxMemoryMB=0.5", warned_at), std::string::npos) << bounded.output;
+  EXPECT_EQ(bounded.output.find(overrun, warned_at + 1), std::string::npos) << "warned more than once";
+
+  expectRefused(sequence, "--param MapType=dense --param MaxMemoryMB=64", {"MaxMemoryMB=64 applies to MapType=sparse only"});
+  expectRefused(sequence, "--param MapType=sparse --param MaxMemoryMB=64 --param SwapDirectory=/nonexistent/swap",
+                {"SwapDirectory", "/nonexistent/swap"});
+}
+
+TEST(Offline, AVolumeRegionWritesOnlyTheVoxelsInsideIt) {
+  const std::string sequence = shortSequence(3);
+  const std::string out = test::scratchDirectory("region");
+  const ToolRun run = offline("--sequence " + sequence + " --output " + out +
+                              " --param MapType=sparse --param CellSize=0.04 --save-volume --volume-region -0.5,-0.5,0.5,0.5,0.3,2");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const TsdfVolume region = io::readVti(out + "/sdf_volume.vti");
+  // The lattice starts at the first camera's position, so voxel i lies at 0.04 i m.
+  EXPECT_EQ(region.dims(), Eigen::Vector3i(25, 20, 38));
+  EXPECT_TRUE(region.position(0, 0, 0).isApprox(Eigen::Vector3f(-0.48f, -0.48f, 0.52f), 1e-5f)) << region.position(0, 0, 0);
+
+  expectRefused(sequence, "--volume-region 0,0,0,1,1,1", {"--volume-region applies to --save-volume"});
+  expectRefused(sequence, "--save-volume --volume-region 0,0,0,1,-1,1", {"--volume-region: expected X0,Y0,Z0,X1,Y1,Z1"});
+}
+
+TEST(Offline, TheJsonSummaryIsValidJsonEvenForAPathWithATab) {
+  const std::string sequence = shortSequence(3);
+  const std::string tabbed = sequence + "\tfolder";
+  fs::rename(sequence, tabbed);
+  const std::string out = test::scratchDirectory("json");
+  const ToolRun run = offline("--sequence '" + tabbed + "' --output " + out);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_EQ(std::system(("/usr/bin/python3 -m json.tool " + out + "/summary.json > /dev/null").c_str()), 0);
+}
+
+TEST(Offline, TheLensDistortionIsTakenFromTheOptionAndSaid) {
+  const std::string sequence = shortSequence(3);
+  const ToolRun none = offline("--sequence " + sequence + " --output " + test::scratchDirectory("lens0"));
+  ASSERT_EQ(none.exit_code, 0) << none.output;
+  EXPECT_NE(none.output.find("lens distortion: none (intrinsics.txt)"), std::string::npos) << none.output;
+  const ToolRun given = offline("--sequence " + sequence + " --output " + test::scratchDirectory("lens1") +
+                                " --distortion 0.1,-0.2,0,0,0.05");
+  ASSERT_EQ(given.exit_code, 0) << given.output;
+  EXPECT_NE(given.output.find("lens distortion removed from every image: k1 0.1 k2 -0.2"), std::string::npos)
+      << given.output;
+  const ToolRun short_list = offline("--sequence " + sequence + " --output " + test::scratchDirectory("lens2") +
+                                     " --distortion 0.1,0.2");
+  EXPECT_EQ(short_list.exit_code, 1);
+  EXPECT_NE(short_list.output.find("--distortion: expected K1,K2,P1,P2,K3, got \"0.1,0.2\""), std::string::npos)
+      << short_list.output;
+}
+
+TEST(Evaluate, ThePerPoseErrorsAreTheOnesTheRmseSummarises) {
+  const std::string sequence = shortSequence(12);
+  const std::string out = test::scratchDirectory("errors");
+  ASSERT_EQ(offline("--sequence " + sequence + " --output " + out).exit_code, 0);
+  const ToolRun run = runCommand(std::string(SDF_TRACKER_EVALUATE) + " --groundtruth " + sequence +
+                                 "/groundtruth.txt --estimate " + out + "/trajectory.txt --errors " + out + "/e.csv");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  std::ifstream csv(out + "/e.csv");
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "timestamp,error_m");
+  double sum = 0.0;
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    sum += std::pow(std::stod(line.substr(line.find(',') + 1)), 2);
+    ++rows;
+  }
+  EXPECT_EQ(rows, 12);
+  const auto ate = evaluation::computeAte(io::readTrajectory(out + "/trajectory.txt"),
+                                          io::readTrajectory(sequence + "/groundtruth.txt"));
+  EXPECT_NEAR(std::sqrt(sum / rows), ate.translation_m.rmse, 1e-5);
+}
+
+}  // namespace
+}  // namespace sdf_tracker::tools
