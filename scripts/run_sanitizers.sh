@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# The core's unit tests (test_core: test/unit/) and the tools' tests (test_tools: test/tools/) once
-# more under AddressSanitizer + UndefinedBehaviorSanitizer, then every reader's fuzz target for
-# FUZZ_SECONDS (default 30) from its committed corpus (test/fuzz/corpus/). Whole sequences
-# (test/sequences/) run in the release build only: their code is the unit tests' code, over more
-# frames. Builds in build/sanitize (plain CMake, no ROS). Results go to
-# RESULTS_DIR (default build/sanitize/results) as JUnit XML, which run_tests.sh counts.
+# The core's unit tests (test_core: test/unit/) and the tools' tests (test_tools: test/tools/),
+# built and run here only, under AddressSanitizer + UndefinedBehaviorSanitizer; then every
+# reader's fuzz target for FUZZ_SECONDS (default 30, two targets at a time) from its committed
+# corpus (test/fuzz/corpus/). Whole sequences (test/sequences/) and the ROS tests run in the
+# release build (scripts/run_tests.sh). Builds in build/sanitize (plain CMake, no ROS). Results go
+# to RESULTS_DIR (default build/sanitize/results) as JUnit XML, which run_tests.sh counts.
 #   scripts/run_sanitizers.sh
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -41,15 +41,25 @@ for test in test_core test_tools; do
     status=1
   fi
 done
-for target in depth_png vti sdfmap ply tum_folder; do
-  echo "sanitizers: fuzzing $target for $seconds s"
-  if "$build/fuzz_$target" "$repo/test/fuzz/corpus/$target" "$seconds" 1 > "$build/fuzz_$target.log" 2>&1; then
-    tail -n 1 "$build/fuzz_$target.log"
-    junit "fuzz_$target" 1 ""
+# Two fuzz targets at a time, one per core, each for the full FUZZ_SECONDS.
+fuzz() {  # fuzz TARGET: runs it and leaves its JUnit result
+  if "$build/fuzz_$1" "$repo/test/fuzz/corpus/$1" "$seconds" 1 > "$build/fuzz_$1.log" 2>&1; then
+    echo "sanitizers: fuzzed $1 for $seconds s: $(tail -n 1 "$build/fuzz_$1.log")"
+    junit "fuzz_$1" 1 ""
   else
-    grep -E "ERROR: (Address|Leak)Sanitizer|runtime error|SUMMARY" "$build/fuzz_$target.log" | head -n 20
-    junit "fuzz_$target" 0 "fuzz_$target crashed or a sanitizer reported (build/sanitize/fuzz_$target.log)"
-    status=1
+    echo "sanitizers: fuzzing $1 failed"
+    grep -E "ERROR: (Address|Leak)Sanitizer|runtime error|SUMMARY" "$build/fuzz_$1.log" | head -n 20
+    junit "fuzz_$1" 0 "fuzz_$1 crashed or a sanitizer reported (build/sanitize/fuzz_$1.log)"
+    return 1
   fi
+}
+targets=(depth_png vti sdfmap ply tum_folder)
+for ((i = 0; i < ${#targets[@]}; i += 2)); do
+  pids=()
+  for target in "${targets[@]:i:2}"; do
+    fuzz "$target" &
+    pids+=($!)
+  done
+  for pid in "${pids[@]}"; do wait "$pid" || status=1; done
 done
 exit $status

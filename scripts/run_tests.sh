@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
-# Every test: installs dependencies, builds with tests, runs the unit and end-to-end gtests and the
-# rostests through catkin, then the unit tests under ASan + UBSan and the readers' fuzz targets
-# (scripts/run_sanitizers.sh), and prints one "N passed, N failed" line.
+# Every test: installs dependencies; builds the package with its release tests and runs them
+# through catkin (whole sequences, the ROS layer's gtests, the rostests); builds and runs the unit
+# and tools' tests under ASan + UBSan with the readers' fuzz targets (scripts/run_sanitizers.sh);
+# configures the package from a deep checkout (scripts/check_deep_checkout.sh); prints one
+# "N passed, N failed" line.
 # Real-data tests read SDF_TRACKER_DATA (default ../shared/data) and skip visibly without it.
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$repo/scripts/install_dependencies.sh"
-bash "$repo/scripts/build.sh" -DCATKIN_ENABLE_TESTING=ON
+# The package and every release test in one build, so that both cores stay busy to the end.
+bash "$repo/scripts/build.sh" -DCATKIN_ENABLE_TESTING=ON all tests test_tum_bag test_camera_replay
 export PATH="/usr/bin:$PATH"
 cd "$repo/build/ws"
 rm -rf build/test_results
@@ -17,16 +20,17 @@ set +u
 # shellcheck disable=SC1091
 source devel/setup.bash
 set -u
-# Build every test in parallel, then run them one at a time: the rostests play bags at their real
-# rate and must not share the two cores with another test.
-catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$(nproc)" tests test_tum_bag test_camera_replay \
-  > "$repo/build/run_tests.log" 2>&1 || true
+# One test at a time: the rostests play bags at their real rate and must not share the two cores
+# with another test.
 catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j1 run_tests \
-  >> "$repo/build/run_tests.log" 2>&1 || true
-# The core's unit tests once more under ASan + UBSan, and every reader's fuzz target (no ROS).
+  > "$repo/build/run_tests.log" 2>&1 || true
+# The unit and tools' tests under ASan + UBSan, and every reader's fuzz target (no ROS).
 RESULTS_DIR="$repo/build/ws/build/test_results/sanitize" bash "$repo/scripts/run_sanitizers.sh" || true
+# The package configures from a checkout path of 150 characters or more.
+RESULTS_DIR="$repo/build/ws/build/test_results/build" bash "$repo/scripts/check_deep_checkout.sh" || true
 # What the tests printed about themselves: figures, skips, failures.
-grep -E "^\[ (figures|  SKIPPED|  FAILED) *\]|SKIPPED:|Failure|\.cpp:[0-9]+:" "$repo/build/run_tests.log" | sort -u || true
+grep -shE "^\[ (figures|  SKIPPED|  FAILED) *\]|SKIPPED:|Failure|\.cpp:[0-9]+:" "$repo/build/run_tests.log" \
+  "$repo"/build/sanitize/test_*.log | sort -u || true
 # The rostests' figures are in their logs.
 grep -rhoE "\[ figures  \].*" "$ROS_LOG_DIR" 2>/dev/null | sort -u || true
 # Count from the result files, so a crashed test binary counts as a failure too.

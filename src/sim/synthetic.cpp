@@ -257,10 +257,32 @@ Scene Scene::singleWall() {
   return scene;
 }
 
+namespace {
+
+/// Whether the ray origin_W + t dir_W (t > 0) can meet `p` at a t below `t_best`, judged by the
+/// sphere that holds `p`: false only when it surely cannot, so that skipping `p` changes no hit.
+/// A room seen from inside always can.
+bool mayHitBefore(const Primitive& p, const Eigen::Vector3d& origin_W, const Eigen::Vector3d& dir_W, double t_best) {
+  if (p.inside) return true;
+  const double radius = p.shape == Primitive::Shape::kSphere ? p.half_extent_m.x() : p.half_extent_m.norm();
+  const double reach = radius + 1e-6 * (1.0 + radius);  // a margin far above either test's rounding
+  const double speed = dir_W.norm();
+  const Eigen::Vector3d to_centre = p.centre_W - origin_W;
+  const double distance = to_centre.norm();
+  if (distance <= reach) return true;                           // the ray starts within the sphere
+  if ((distance - reach) / speed > t_best) return false;        // all of it lies beyond the best hit
+  const double along = dir_W.dot(to_centre) / speed;
+  if (along <= 0.0) return false;                               // it lies behind the ray
+  return to_centre.squaredNorm() - along * along <= reach * reach;  // the ray's line passes within reach
+}
+
+}  // namespace
+
 bool Scene::intersect(const Eigen::Vector3d& origin_W, const Eigen::Vector3d& dir_W, double* t,
                       Eigen::Vector3d* normal_W) const {
   *t = kInf;
   for (const Primitive& p : primitives_) {
+    if (!mayHitBefore(p, origin_W, dir_W, *t)) continue;
     double t_hit;
     Eigen::Vector3d n;
     const bool hit = p.shape == Primitive::Shape::kBox ? intersectBox(p, origin_W, dir_W, &t_hit, &n)
