@@ -130,32 +130,17 @@ PinholeCamera PinholeCamera::openNiDefault(int width, int height) {
   return camera;
 }
 
-std::optional<LensDistortion> PinholeCamera::tumPublishedDistortion(const PinholeCamera& camera) {
+std::string PinholeCamera::tumCameraWithIntrinsicsOf(const PinholeCamera& camera) {
   constexpr double kTolerance_px = 0.05;
-  if (camera.width != 640 || camera.height != 480) return std::nullopt;
+  if (camera.width != 640 || camera.height != 480) return "";
   for (const TumCalibration& c : kTumCameras) {
-    if (c.distortion.isZero()) continue;  // nothing to add
+    if (c.distortion.isZero()) continue;  // nothing the user would miss
     if (std::abs(camera.fx - c.fx) <= kTolerance_px && std::abs(camera.fy - c.fy) <= kTolerance_px &&
         std::abs(camera.cx - c.cx) <= kTolerance_px && std::abs(camera.cy - c.cy) <= kTolerance_px) {
-      return c.distortion;
+      return c.name;
     }
   }
-  return std::nullopt;
-}
-
-LensDistortion PinholeCamera::unstatedDistortion(const PinholeCamera& camera, double first_stamp_s,
-                                                 std::string* why) {
-  const std::optional<LensDistortion> published = tumPublishedDistortion(camera);
-  if (!published) {
-    why->clear();
-    return LensDistortion();
-  }
-  if (!(first_stamp_s >= kUnixTimeFrom_s)) {
-    *why = "TUM's intrinsics, but not stamped in Unix time as TUM's recordings are";
-    return LensDistortion();
-  }
-  *why = "TUM's published calibration for these intrinsics";
-  return *published;
+  return "";
 }
 
 Eigen::AlignedBox3f PinholeCamera::viewBox(const Eigen::Isometry3f& T_W_C, float z_far_m) const {

@@ -94,6 +94,7 @@ TumSequence openSequence(const CommandLine& args) {
     sequence.truncate(static_cast<size_t>(frames));
   }
   if (sequence.size() == 0) throw std::runtime_error(args.positional(0) + "/depth.txt lists no frame");
+  if (!sequence.distortionHint().empty()) std::cerr << "note: " << sequence.distortionHint() << "\n";
   return sequence;
 }
 

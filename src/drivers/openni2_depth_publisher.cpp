@@ -9,11 +9,13 @@
 //
 // Stamps: a live camera's frames are stamped on arrival. A recording's frames carry its own
 // clock: the stamps it holds (tum_to_oni writes the sequence's), or, for recordings made by
-// OpenNI's Recorder (whose clock starts at 0), the playback start plus the recorded offset. The
-// node ends after the recording's last frame. A live camera that stops is re-opened until it is
-// back; with no camera at all the node exits with an error.
+// OpenNI's Recorder (whose clock starts at 0), the playback start plus the recorded offset. A
+// recording is published at its recorded pace, frame by frame; the node ends after its last frame.
+// A live camera that stops is re-opened until it is back; with no camera at all the node exits
+// with an error.
 
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 #include <OpenNI.h>
@@ -24,6 +26,8 @@
 namespace {
 
 constexpr int kFrameTimeout_ms = 2000;
+/// OpenNI's playback speed that makes a recording hand on a frame only when one is read.
+constexpr float kManualPlayback = -1.0f;
 constexpr double kReopenInterval_s = sdf_tracker_ros::DepthCameraPublisher::kReopenInterval_s;
 
 class OpenNI2Driver {
@@ -76,6 +80,10 @@ class OpenNI2Driver {
     if (device_.isFile()) {
       playback_ = device_.getPlaybackControl();
       playback_->setRepeatEnabled(false);
+      // OniFile's own clock hands frames on in bursts, and a subscriber that keeps only the newest
+      // frame then loses those in between: frames are read one at a time instead ("manual" speed)
+      // and published at the recording's own pace (paceLikeTheRecording).
+      playback_->setSpeed(kManualPlayback);
       frames_in_recording_ = playback_->getNumberOfFrames(depth_);
       publisher_.useRecordingCalibration(device_id_);
       ROS_INFO("openni2_depth_publisher: playing %s (%d depth frames, %dx%d)", device_id_.c_str(), frames_in_recording_,
@@ -150,8 +158,11 @@ class OpenNI2Driver {
       }
       int ready = -1;
       openni::VideoStream* streams[] = {&depth_};
-      if (openni::OpenNI::waitForAnyStream(streams, 1, &ready, kFrameTimeout_ms) == openni::STATUS_OK &&
-          depth_.readFrame(&frame) == openni::STATUS_OK && frame.isValid()) {
+      // In manual playback a frame is there whenever it is read.
+      const bool available = playback_ != nullptr ||
+                             openni::OpenNI::waitForAnyStream(streams, 1, &ready, kFrameTimeout_ms) == openni::STATUS_OK;
+      if (available && depth_.readFrame(&frame) == openni::STATUS_OK && frame.isValid()) {
+        if (playback_ != nullptr) paceLikeTheRecording(frame);
         publish(frame);
         if (playback_ != nullptr && frames_ >= static_cast<size_t>(frames_in_recording_)) {
           publisher_.finishRecording("openni2_depth_publisher", frames_);
@@ -181,6 +192,20 @@ class OpenNI2Driver {
     return 0;
   }
 
+  /// Waits until this frame is as far from the recording's first frame in wall time as it was when
+  /// it was recorded, so frames go out evenly at the recorded rate.
+  void paceLikeTheRecording(const openni::VideoFrameRef& frame) {
+    const uint64_t recorded_us = frame.getTimestamp();
+    if (frames_ == 0) {
+      first_frame_wall_ = ros::WallTime::now();
+      first_frame_us_ = recorded_us;
+      return;
+    }
+    const double offset_s = recorded_us >= first_frame_us_ ? (recorded_us - first_frame_us_) * 1e-6 : 0.0;
+    const ros::WallDuration wait = (first_frame_wall_ + ros::WallDuration(offset_s)) - ros::WallTime::now();
+    if (wait > ros::WallDuration(0.0)) wait.sleep();
+  }
+
   ros::Time stampOf(const openni::VideoFrameRef& frame) {
     if (playback_ == nullptr) return ros::Time::now();
     const uint64_t recorded_us = frame.getTimestamp();
@@ -207,6 +232,8 @@ class OpenNI2Driver {
   openni::PlaybackControl* playback_ = nullptr;
   int frames_in_recording_ = 0;
   ros::Time relative_clock_start_;
+  ros::WallTime first_frame_wall_;  ///< when the recording's first frame went out
+  uint64_t first_frame_us_ = 0;     ///< its recorded time
   sdf_tracker::PinholeCamera nominal_;
   size_t frames_ = 0;
   bool streaming_ = false;

@@ -70,39 +70,51 @@ TumSequence TumSequence::open(const std::string& directory, const SequenceOption
   }
   if (sequence.frames_.empty()) throw std::runtime_error(list_path + ": lists no depth frames");
 
-  // TUM's downloads carry no intrinsics file; their folder's name says which camera took them.
-  // The lens distortion is decided below, with the recording's stamps, as for any unstated one.
+  // TUM's downloads carry no intrinsics file; their folder's name says which camera took them, and
+  // so which calibration TUM publishes for them, lens distortion included.
   std::filesystem::path folder = std::filesystem::path(directory).lexically_normal();
   if (folder.filename().empty()) folder = folder.parent_path();  // "dir/"
   const std::string named = PinholeCamera::tumCameraMentionedIn(folder.filename().string());
-  sequence.camera_ = PinholeCamera::tumCamera(named.empty() ? "freiburg1" : named)->withoutDistortion();
+  sequence.camera_ = named.empty() ? PinholeCamera::tumFreiburg1() : *PinholeCamera::tumCamera(named);
   sequence.intrinsics_source_ =
-      named.empty() ? "TUM freiburg1 defaults" : "TUM " + named + ", from the folder's name";
-  bool distortion_given = false;
+      named.empty() ? "TUM freiburg1 defaults" : "TUM " + named + "'s published calibration, from the folder's name";
+  bool distortion_stated = false;
   const std::string intrinsics_path = directory + "/intrinsics.txt";
   if (fileExists(intrinsics_path)) {
-    distortion_given = readIntrinsicsFile(intrinsics_path, &sequence.camera_, &sequence.depth_factor_);
+    sequence.camera_ = PinholeCamera::tumFreiburg1();  // what the file does not state is not a TUM camera's
+    distortion_stated = readIntrinsicsFile(intrinsics_path, &sequence.camera_, &sequence.depth_factor_);
     sequence.intrinsics_source_ = "intrinsics.txt";
+  } else {
+    distortion_stated = !named.empty();
   }
   if (options.camera) {
     sequence.camera_ = *options.camera;
     sequence.intrinsics_source_ = "options";
-    distortion_given = true;
+    distortion_stated = false;
   }
+  sequence.distortion_source_ = distortion_stated ? sequence.intrinsics_source_ : "none stated";
   if (options.depth_factor) sequence.depth_factor_ = *options.depth_factor;
   if (!(sequence.depth_factor_ > 0.0)) {
     throw std::runtime_error(directory + ": depth factor must be > 0 (got " + std::to_string(sequence.depth_factor_) +
                              ")");
   }
-  sequence.distortion_source_ = distortion_given ? sequence.intrinsics_source_ : "none stated";
   if (options.distortion) {
     sequence.camera_.distortion = *options.distortion;
     sequence.distortion_source_ = "options";
-  } else if (!distortion_given) {
-    std::string why;
-    sequence.camera_.distortion =
-        PinholeCamera::unstatedDistortion(sequence.camera_, sequence.frames_.front().timestamp_s, &why);
-    if (!why.empty()) sequence.distortion_source_ = why;
+    distortion_stated = true;
+  }
+  if (!distortion_stated) {
+    // Say what the numbers suggest, and do nothing about it: the data states no distortion.
+    const std::string tum = PinholeCamera::tumCameraWithIntrinsicsOf(sequence.camera_);
+    if (!tum.empty()) {
+      const LensDistortion d = PinholeCamera::tumCamera(tum)->distortion;  // a copy: tumCamera returns a value
+      std::ostringstream hint;
+      hint << "these are TUM " << tum << "'s intrinsics, but no lens distortion is stated, so none is removed; if "
+           << "the images are TUM's, state the distortion TUM publishes for them: " << d.k1 << " " << d.k2 << " "
+           << d.p1 << " " << d.p2 << " " << d.k3 << " as intrinsics.txt's last five columns, or sdf_tracker_offline "
+           << "--distortion " << d.k1 << "," << d.k2 << "," << d.p1 << "," << d.p2 << "," << d.k3;
+      sequence.distortion_hint_ = hint.str();
+    }
   }
   const auto violations = sequence.camera_.validate();
   if (!violations.empty()) throw std::runtime_error(directory + ": invalid intrinsics: " + violations.front());

@@ -114,7 +114,7 @@ bool holdsOpenNiDefault(const sensor_msgs::CameraInfo& info) {
 }
 
 sdf_tracker::PinholeCamera trackingCamera(const sensor_msgs::CameraInfo& info, const std::string& info_topic,
-                                          const std::string& tum_camera, double stamp_s, std::string* source) {
+                                          const std::string& tum_camera, std::string* source) {
   if (!tum_camera.empty()) {
     const sdf_tracker::PinholeCamera camera = tumCameraNamed(tum_camera);
     if (const std::string mismatch = camera.sizeMismatch(info.width, info.height); !mismatch.empty()) {
@@ -125,11 +125,13 @@ sdf_tracker::PinholeCamera trackingCamera(const sensor_msgs::CameraInfo& info, c
   }
   sdf_tracker::PinholeCamera camera = toCamera(info);
   *source = info_topic;
-  // Drivers send D all zero when they know no distortion: the same rule as a sequence's.
+  // D all zero states "no distortion", as image_geometry reads it. Intrinsics that match a TUM
+  // camera's are said, never acted on.
   if (camera.distortion.isZero()) {
-    std::string why;
-    camera.distortion = sdf_tracker::PinholeCamera::unstatedDistortion(camera, stamp_s, &why);
-    if (!why.empty()) *source += " with D all zero; " + why;
+    if (const std::string tum = sdf_tracker::PinholeCamera::tumCameraWithIntrinsicsOf(camera); !tum.empty()) {
+      *source += " with D all zero; these are TUM " + tum + "'s intrinsics: if the images are TUM's, set ~tum_camera:=" +
+                 tum + " for its published calibration";
+    }
   }
   return camera;
 }

@@ -169,8 +169,7 @@ st::PinholeCamera TrackerServer::cameraFor(const Frame& frame) {
       questioned_intrinsics_ = true;
     }
   } else {
-    camera = trackingCamera(*frame.info, info_topic_, options_.tum_camera, frame.image->header.stamp.toSec(),
-                            &distortion_source);
+    camera = trackingCamera(*frame.info, info_topic_, options_.tum_camera, &distortion_source);
     if (!questioned_intrinsics_) {
       questioned_intrinsics_ = true;
       const auto& K = frame.info->K;

@@ -259,6 +259,7 @@ int run(int argc, char** argv) {
             << camera.cy << " (" << sequence.intrinsicsSource() << "), depth factor " << sequence.depthFactor()
             << "\n";
   std::cout << camera.distortion.summary(sequence.distortionSource()) << "\n";
+  if (!sequence.distortionHint().empty()) std::cout << "note: " << sequence.distortionHint() << "\n";
   st::SdfPipeline pipeline(settings.pipeline);
   if (args.has("load-volume")) {
     pipeline.setMap(st::io::readMap(args.get("load-volume"), settings.pipeline.volume.compact_voxels));

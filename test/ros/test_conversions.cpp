@@ -92,33 +92,35 @@ TEST(Conversions, CameraInfoRoundTripsThroughTheCamera) {
 }
 
 TEST(Conversions, ATumCameraReplacesTheBagsDriverDefaultCameraInfo) {
-  // What the benchmark's bags of 2011 carry: the OpenNI driver's default, stamped in Unix time.
+  // What the benchmark's bags of 2011 carry: the OpenNI driver's default.
   std_msgs::Header header;
   header.stamp = ros::Time(1305031102.16);
   const sensor_msgs::CameraInfo recorded = toCameraInfo(sdf_tracker::PinholeCamera::openNiDefault(640, 480), header);
   EXPECT_TRUE(holdsOpenNiDefault(recorded));
-  const double stamp_s = header.stamp.toSec();
   std::string source;
 
   const sdf_tracker::PinholeCamera as_recorded =
-      trackingCamera(recorded, "/camera/depth/camera_info", "", stamp_s, &source);
+      trackingCamera(recorded, "/camera/depth/camera_info", "", &source);
   EXPECT_EQ(as_recorded, sdf_tracker::PinholeCamera::openNiDefault(640, 480)) << "no TUM camera: camera_info as it is";
   EXPECT_EQ(source, "/camera/depth/camera_info");
 
   const sdf_tracker::PinholeCamera freiburg1 =
-      trackingCamera(recorded, "/camera/depth/camera_info", "freiburg1", stamp_s, &source);
+      trackingCamera(recorded, "/camera/depth/camera_info", "freiburg1", &source);
   EXPECT_EQ(freiburg1, *sdf_tracker::PinholeCamera::tumCamera("freiburg1")) << "intrinsics and distortion";
   EXPECT_FALSE(freiburg1.distortion.isZero());
   EXPECT_NE(source.find("~tum_camera freiburg1"), std::string::npos) << source;
 
-  // camera_info that states TUM's freiburg1 intrinsics and D all zero gets TUM's distortion too.
+  // camera_info that states TUM's freiburg1 intrinsics and D all zero states no distortion: the
+  // match is said, with the parameter that would apply TUM's, and nothing is changed.
   const sensor_msgs::CameraInfo stated = toCameraInfo(sdf_tracker::PinholeCamera::tumFreiburg1(), header);
   EXPECT_FALSE(holdsOpenNiDefault(stated));
-  EXPECT_EQ(trackingCamera(stated, "/camera/depth/camera_info", "", stamp_s, &source), freiburg1);
+  EXPECT_EQ(trackingCamera(stated, "/camera/depth/camera_info", "", &source), sdf_tracker::PinholeCamera::tumFreiburg1());
+  EXPECT_EQ(source, "/camera/depth/camera_info with D all zero; these are TUM freiburg1's intrinsics: if the images "
+                    "are TUM's, set ~tum_camera:=freiburg1 for its published calibration");
 
   auto refusal = [&](const sensor_msgs::CameraInfo& info, const std::string& tum_camera) -> std::string {
     try {
-      trackingCamera(info, "/camera/depth/camera_info", tum_camera, stamp_s, &source);
+      trackingCamera(info, "/camera/depth/camera_info", tum_camera, &source);
     } catch (const std::invalid_argument& e) {
       return e.what();
     }

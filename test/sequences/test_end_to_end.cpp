@@ -67,7 +67,7 @@ TEST(SyntheticSequence, ALensWithTumsDistortionIsTrackedOnceTheDistortionIsRemov
   spec.frames = 150;
   spec.seed = 11;
   spec.camera = test::testCamera();
-  spec.camera.distortion = *PinholeCamera::tumPublishedDistortion(PinholeCamera::tumFreiburg1());
+  spec.camera.distortion = PinholeCamera::tumCamera("freiburg1")->distortion;
   synthetic::writeSequence(dir, spec);
   const TumSequence sequence = TumSequence::open(dir);
   ASSERT_EQ(sequence.camera().distortion, spec.camera.distortion) << "intrinsics.txt carries the distortion";

@@ -112,7 +112,7 @@ TEST(CalibrationFile, HoldsTheIntrinsicsInCameraInfoManagersLayout) {
   EXPECT_EQ(calibrationFileFor(root), root + "/depth_camera_info.yaml");
   EXPECT_EQ(calibrationFileFor(root + "/x.oni"), root + "/x.oni.yaml");
   PinholeCamera camera = PinholeCamera::tumFreiburg1();
-  camera.distortion = *PinholeCamera::tumPublishedDistortion(camera);
+  camera.distortion = PinholeCamera::tumCamera("freiburg1")->distortion;
   writeCalibrationFile(root + "/c.yaml", camera, "depth");
   std::ifstream in(root + "/c.yaml");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

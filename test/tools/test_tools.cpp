@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <sstream>
 
 #include "sdf_tracker/cli/command_line.h"
 #include "sdf_tracker/cli/output_folder.h"
@@ -259,6 +261,31 @@ TEST(Offline, TheLensDistortionIsTakenFromTheOptionAndSaid) {
   EXPECT_EQ(short_list.exit_code, 1);
   EXPECT_NE(short_list.output.find("--distortion: expected K1,K2,P1,P2,K3, got \"0.1,0.2\""), std::string::npos)
       << short_list.output;
+}
+
+TEST(Offline, TumsIntrinsicsWithoutAStatedDistortionAreTrackedAsTheyAreAndTheMatchSaid) {
+  // A sequence rendered for freiburg1's intrinsics through an ideal lens, its intrinsics.txt
+  // without distortion columns, stamped in Unix time as TUM's recordings are.
+  const std::string dir = test::scratchDirectory("tum_intrinsics");
+  synthetic::SequenceSpec spec;
+  spec.frames = 3;
+  synthetic::writeSequence(dir, spec);
+  std::ofstream(dir + "/intrinsics.txt") << "517.3 516.5 318.6 255.3 640 480 5000\n";
+  std::ifstream list(dir + "/depth.txt");
+  std::ostringstream unix_time;
+  unix_time << std::fixed << std::setprecision(6);
+  std::string line;
+  for (int frame = 0; std::getline(list, line);) {
+    if (!line.empty() && line[0] != '#') unix_time << 1305031102.0 + frame++ / 30.0 << line.substr(line.find(' ')) << "\n";
+  }
+  std::ofstream(dir + "/depth.txt") << unix_time.str();
+  const ToolRun run = offline("--sequence " + dir + " --output " + test::scratchDirectory("tum_intrinsics_out"));
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("lens distortion: none (none stated)"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("note: these are TUM freiburg1's intrinsics, but no lens distortion is stated, so none is "
+                            "removed"),
+            std::string::npos)
+      << run.output;
 }
 
 TEST(Evaluate, ThePerPoseErrorsAreTheOnesTheRmseSummarises) {

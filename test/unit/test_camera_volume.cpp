@@ -49,7 +49,7 @@ TEST(PinholeCamera, ValidateNamesEveryViolation) {
 /// TUM freiburg1's published lens (the strongest distortion a supported camera has).
 PinholeCamera distortedCamera() {
   PinholeCamera camera = PinholeCamera::tumFreiburg1();
-  camera.distortion = *PinholeCamera::tumPublishedDistortion(camera);
+  camera.distortion = PinholeCamera::tumCamera("freiburg1")->distortion;
   return camera;
 }
 
@@ -67,26 +67,15 @@ TEST(LensDistortion, UndistortInvertsDistortAcrossTheImage) {
   EXPECT_EQ(LensDistortion().distort(corner), corner);
 }
 
-TEST(LensDistortion, TumsPublishedDistortionBelongsToTumsIntrinsicsAndRecordingsOnly) {
-  const auto freiburg1 = PinholeCamera::tumPublishedDistortion(PinholeCamera::tumFreiburg1());
-  ASSERT_TRUE(freiburg1.has_value());
-  EXPECT_DOUBLE_EQ(freiburg1->k1, 0.2624);
-  EXPECT_DOUBLE_EQ(freiburg1->k3, 1.1633);
+TEST(PinholeCamera, IntrinsicsThatAreATumCamerasAreRecognisedForAHintOnly) {
+  EXPECT_EQ(PinholeCamera::tumCameraWithIntrinsicsOf(PinholeCamera::tumFreiburg1()), "freiburg1");
   PinholeCamera freiburg2 = PinholeCamera::tumFreiburg1();
   freiburg2.fx = 520.9, freiburg2.fy = 521.0, freiburg2.cx = 325.1, freiburg2.cy = 249.7;
-  ASSERT_TRUE(PinholeCamera::tumPublishedDistortion(freiburg2).has_value());
-  EXPECT_DOUBLE_EQ(PinholeCamera::tumPublishedDistortion(freiburg2)->k1, 0.2312);
-  EXPECT_FALSE(PinholeCamera::tumPublishedDistortion(PinholeCamera()).has_value()) << "a generic Kinect";
-  EXPECT_FALSE(PinholeCamera::tumPublishedDistortion(test::testCamera()).has_value()) << "another resolution";
-  // Assumed for a recording only when it is stamped like TUM's (Unix time), not for generated data.
-  std::string why;
-  EXPECT_EQ(PinholeCamera::unstatedDistortion(PinholeCamera::tumFreiburg1(), 1305031102.16, &why), *freiburg1);
-  EXPECT_NE(why.find("TUM's published"), std::string::npos) << why;
-  EXPECT_TRUE(PinholeCamera::unstatedDistortion(PinholeCamera::tumFreiburg1(), 0.0, &why).isZero());
-  EXPECT_NE(why.find("Unix time"), std::string::npos) << why;
-  EXPECT_TRUE(PinholeCamera::unstatedDistortion(PinholeCamera::tumFreiburg1(), std::nan(""), &why).isZero());
-  EXPECT_TRUE(PinholeCamera::unstatedDistortion(PinholeCamera(), 1305031102.16, &why).isZero());
-  EXPECT_EQ(why, "") << "nothing to explain for a camera that is not TUM's";
+  EXPECT_EQ(PinholeCamera::tumCameraWithIntrinsicsOf(freiburg2), "freiburg2");
+  EXPECT_EQ(PinholeCamera::tumCameraWithIntrinsicsOf(*PinholeCamera::tumCamera("freiburg3")), "")
+      << "TUM undistorted freiburg3's images: nothing the user would miss";
+  EXPECT_EQ(PinholeCamera::tumCameraWithIntrinsicsOf(PinholeCamera()), "") << "a generic Kinect";
+  EXPECT_EQ(PinholeCamera::tumCameraWithIntrinsicsOf(test::testCamera()), "") << "another resolution";
 }
 
 TEST(PinholeCamera, TumCamerasCarryTheirPublishedCalibrationByName) {
@@ -96,7 +85,6 @@ TEST(PinholeCamera, TumCamerasCarryTheirPublishedCalibrationByName) {
   EXPECT_DOUBLE_EQ(freiburg1->cy, 255.3);
   EXPECT_DOUBLE_EQ(freiburg1->distortion.k1, 0.2624);
   EXPECT_EQ(freiburg1->withoutDistortion(), PinholeCamera::tumFreiburg1());
-  EXPECT_EQ(freiburg1->distortion, *PinholeCamera::tumPublishedDistortion(PinholeCamera::tumFreiburg1()));
   const std::optional<PinholeCamera> freiburg2 = PinholeCamera::tumCamera("freiburg2");
   ASSERT_TRUE(freiburg2.has_value());
   EXPECT_DOUBLE_EQ(freiburg2->fx, 520.9);
@@ -105,7 +93,6 @@ TEST(PinholeCamera, TumCamerasCarryTheirPublishedCalibrationByName) {
   ASSERT_TRUE(freiburg3.has_value());
   EXPECT_DOUBLE_EQ(freiburg3->fy, 539.2);
   EXPECT_TRUE(freiburg3->distortion.isZero()) << "TUM undistorted freiburg3's images";
-  EXPECT_FALSE(PinholeCamera::tumPublishedDistortion(*freiburg3).has_value()) << "no distortion to add";
   EXPECT_FALSE(PinholeCamera::tumCamera("fr1").has_value());
   EXPECT_FALSE(PinholeCamera::tumCamera("").has_value());
   EXPECT_EQ(PinholeCamera::tumCameraNames(), "freiburg1, freiburg2, freiburg3");

@@ -312,41 +312,45 @@ TEST(TumSequence, AFolderNamedLikeATumDownloadGetsThatCamerasCalibration) {
     const std::string dir = test::scratchDirectory("rgbd_dataset_" + camera + "_desk");
     synthetic::writeSequence(dir, spec);
     std::remove((dir + "/intrinsics.txt").c_str());  // as TUM's downloads
-    // Stamped as TUM stamped its recordings, which is when TUM's distortion is assumed.
-    const std::string first = TumSequence::open(dir).depthPath(0).substr(dir.size() + 1);
-    writeFile(dir + "/depth.txt", "1305031102.160407 " + first + "\n");
     for (const std::string& path : {dir, dir + "/"}) {
       const TumSequence sequence = TumSequence::open(path);
-      EXPECT_EQ(sequence.camera(), *PinholeCamera::tumCamera(camera)) << path;
-      EXPECT_EQ(sequence.intrinsicsSource(), "TUM " + camera + ", from the folder's name");
+      EXPECT_EQ(sequence.camera(), *PinholeCamera::tumCamera(camera)) << path << ": intrinsics and distortion";
+      EXPECT_EQ(sequence.intrinsicsSource(), "TUM " + camera + "'s published calibration, from the folder's name");
+      EXPECT_EQ(sequence.distortionSource(), sequence.intrinsicsSource());
+      EXPECT_EQ(sequence.distortionHint(), "") << "the folder states the camera";
     }
   }
 }
 
-TEST(TumSequence, LensDistortionComesFromTheFileOrTumsPublishedCalibration) {
+TEST(TumSequence, LensDistortionIsWhatTheDataStatesNeverInferredFromTheIntrinsics) {
   const std::string dir = test::scratchDirectory("seq_distortion");
   synthetic::SequenceSpec spec;
   spec.frames = 1;
   synthetic::writeSequence(dir, spec);  // 640x480 with TUM freiburg1's intrinsics, written with 0 distortion
   EXPECT_TRUE(TumSequence::open(dir).camera().distortion.isZero()) << "the file's explicit zeros hold";
   EXPECT_EQ(TumSequence::open(dir).distortionSource(), "intrinsics.txt");
+  EXPECT_EQ(TumSequence::open(dir).distortionHint(), "") << "stated: nothing to suggest";
 
+  // TUM's intrinsics, no distortion columns, stamped as TUM's recordings are: still none, and said.
   writeFile(dir + "/intrinsics.txt", "# fx fy cx cy width height depth_factor\n517.3 516.5 318.6 255.3 640 480 5000\n");
-  const TumSequence generated = TumSequence::open(dir);
-  EXPECT_TRUE(generated.camera().distortion.isZero()) << "TUM's intrinsics, but a generated sequence's clock";
-  EXPECT_NE(generated.distortionSource().find("Unix time"), std::string::npos) << generated.distortionSource();
-
-  // The same frame stamped as TUM stamped its recordings.
-  writeFile(dir + "/depth.txt", "1305031102.160407 depth/" + generated.depthPath(0).substr(dir.size() + 7) + "\n");
-  const TumSequence tum = TumSequence::open(dir);
-  EXPECT_DOUBLE_EQ(tum.camera().distortion.k1, 0.2624) << "TUM's intrinsics without distortion: TUM's distortion";
-  EXPECT_NE(tum.distortionSource().find("TUM"), std::string::npos);
+  const std::string first = TumSequence::open(dir).depthPath(0).substr(dir.size() + 1);
+  writeFile(dir + "/depth.txt", "1305031102.160407 " + first + "\n");
+  const TumSequence unstated = TumSequence::open(dir);
+  EXPECT_TRUE(unstated.camera().distortion.isZero()) << "intrinsics that match are not a calibration";
+  EXPECT_EQ(unstated.distortionSource(), "none stated");
+  EXPECT_EQ(unstated.distortionHint(),
+            "these are TUM freiburg1's intrinsics, but no lens distortion is stated, so none is removed; if the "
+            "images are TUM's, state the distortion TUM publishes for them: 0.2624 -0.9531 -0.0054 0.0026 1.1633 as "
+            "intrinsics.txt's last five columns, or sdf_tracker_offline --distortion "
+            "0.2624,-0.9531,-0.0054,0.0026,1.1633");
   std::remove((dir + "/intrinsics.txt").c_str());
-  EXPECT_DOUBLE_EQ(TumSequence::open(dir).camera().distortion.k1, 0.2624) << "the freiburg1 defaults";
+  EXPECT_TRUE(TumSequence::open(dir).camera().distortion.isZero()) << "the freiburg1 defaults: intrinsics only";
+  EXPECT_NE(TumSequence::open(dir).distortionHint(), "");
 
   writeFile(dir + "/intrinsics.txt", "585 585 320 240 640 480 1000\n");
   EXPECT_TRUE(TumSequence::open(dir).camera().distortion.isZero()) << "another camera: none";
   EXPECT_EQ(TumSequence::open(dir).distortionSource(), "none stated");
+  EXPECT_EQ(TumSequence::open(dir).distortionHint(), "") << "not a TUM camera's intrinsics";
   writeFile(dir + "/intrinsics.txt", "585 585 320 240 640 480 1000 0.1 -0.2 0.001 0.002 0.3\n");
   EXPECT_DOUBLE_EQ(TumSequence::open(dir).camera().distortion.p2, 0.002);
   SequenceOptions options;

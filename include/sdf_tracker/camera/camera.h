@@ -85,7 +85,7 @@ struct PinholeCamera {
   bool operator!=(const PinholeCamera& o) const { return !(*this == o); }
 
   /// The TUM RGB-D benchmark's freiburg1 intrinsics (of the colour camera, to which the depth images
-  /// are registered), without lens distortion: see tumPublishedDistortion.
+  /// are registered), without lens distortion: tumCamera("freiburg1") has that too.
   static PinholeCamera tumFreiburg1();
 
   /// The calibration TUM publishes for one of the benchmark's cameras ("freiburg1", "freiburg2",
@@ -102,20 +102,11 @@ struct PinholeCamera {
   /// fx = fy = 525 px at 640x480, the centre of the image, no distortion; scaled to the size.
   static PinholeCamera openNiDefault(int width, int height);
 
-  /// The lens distortion TUM publishes beside these intrinsics when they are a benchmark camera's
-  /// (freiburg1 or freiburg2 at 640x480, matched to 0.05 px); nothing for any other camera. The
-  /// benchmark's depth images are registered to that colour camera but not undistorted, and files
-  /// that copy TUM's intrinsics usually leave the distortion out.
-  static std::optional<LensDistortion> tumPublishedDistortion(const PinholeCamera& camera);
-
-  /// The lens distortion to assume for a recording that states none (intrinsics.txt without the
-  /// columns, camera_info with D all zero), and in `why` the reason in words ("" when there is
-  /// nothing to explain): TUM's published distortion when the intrinsics are a TUM camera's and
-  /// the recording is stamped in Unix time, as TUM's recordings are; else none. Sequences generated
-  /// for TUM's intrinsics (a simulator's) count time from about 0 and were not taken through TUM's lens.
-  static LensDistortion unstatedDistortion(const PinholeCamera& camera, double first_stamp_s, std::string* why);
-  /// Stamps from here on are Unix time (2001-09-09); a sequence's own clock starts near 0.
-  static constexpr double kUnixTimeFrom_s = 1e9;
+  /// The TUM camera whose published intrinsics these are, with a lens distortion TUM publishes
+  /// beside them (freiburg1 or freiburg2 at 640x480, matched to 0.05 px), or "". For a hint to the
+  /// user only: intrinsics that match a known camera are a coincidence to report, not a
+  /// calibration to apply (a simulator or another camera may use the same numbers).
+  static std::string tumCameraWithIntrinsicsOf(const PinholeCamera& camera);
 };
 
 }  // namespace sdf_tracker

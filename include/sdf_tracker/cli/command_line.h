@@ -33,7 +33,8 @@ class CommandLine {
 };
 
 /// The converters' input: the TUM-layout folder given as the first positional argument, cut to
-/// its first --frames N when that option is given. Throws when the folder lists no frame.
+/// its first --frames N when that option is given; its distortion hint, if any, on stderr.
+/// Throws when the folder lists no frame.
 TumSequence openSequence(const CommandLine& args);
 
 /// A tool's main(): runs `run` and turns any exception into "<tool>: error: <what>" on stderr and

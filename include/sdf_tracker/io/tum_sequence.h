@@ -22,11 +22,12 @@ struct SequenceOptions {
 /// A depth sequence in the TUM RGB-D layout: depth.txt ("timestamp depth/<file>.png"), 16-bit
 /// PNGs, optional groundtruth.txt and intrinsics.txt (kIntrinsicsColumns).
 /// Intrinsics and depth factor come from the options, else intrinsics.txt, else the TUM camera
-/// the folder's name mentions (rgbd_dataset_freiburg2_desk: freiburg2's calibration), else the
-/// TUM freiburg1 defaults (517.3, 516.5, 318.6, 255.3); factor 5000. The lens distortion comes from
-/// the options, else intrinsics.txt's last five columns; when neither gives it, the intrinsics
-/// are a TUM benchmark camera's and the frames are stamped in Unix time as TUM's recordings are,
-/// it is the distortion TUM publishes with them (the benchmark's depth is not undistorted); else none.
+/// the folder's name mentions as TUM names its downloads (rgbd_dataset_freiburg2_desk: freiburg2's
+/// published calibration), else the TUM freiburg1 defaults (517.3, 516.5, 318.6, 255.3); factor
+/// 5000. The lens distortion is what the data states: the options' --distortion, else
+/// intrinsics.txt's last five columns (without them: none), else the distortion TUM publishes for
+/// the camera the folder's name gives; else none. It is never inferred from intrinsics that happen
+/// to be a TUM camera's: distortionHint() then says how to state it.
 class TumSequence {
  public:
   /// Throws std::runtime_error naming the file and the problem.
@@ -43,9 +44,12 @@ class TumSequence {
   /// Where the intrinsics came from, for the user: "options", "intrinsics.txt", "TUM freiburg2, from
   /// the folder's name" or "TUM freiburg1 defaults".
   const std::string& intrinsicsSource() const { return intrinsics_source_; }
-  /// Where the lens distortion came from, or why there is none, for the user: "none stated",
-  /// "options", "intrinsics.txt", TUM's published calibration, or why that was not assumed.
+  /// Where the lens distortion came from, for the user: "none stated", "options",
+  /// "intrinsics.txt" or the TUM camera the folder's name gives.
   const std::string& distortionSource() const { return distortion_source_; }
+  /// When no distortion is stated and the intrinsics are a TUM camera's: a sentence for the user
+  /// saying so and how to state TUM's published one; else "".
+  const std::string& distortionHint() const { return distortion_hint_; }
   const std::vector<io::StampedPose>& groundTruth() const { return ground_truth_; }
 
   /// Drops every frame after the first n.
@@ -66,6 +70,7 @@ class TumSequence {
   double depth_factor_ = kTumDepthFactor;
   std::string intrinsics_source_;
   std::string distortion_source_;
+  std::string distortion_hint_;
   std::vector<io::StampedPose> ground_truth_;
 };
 

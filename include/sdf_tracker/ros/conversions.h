@@ -37,13 +37,14 @@ sdf_tracker::PinholeCamera tumCameraNamed(const std::string& tum_camera);
 /// benchmark's bags): PinholeCamera::openNiDefault for its size, D all zero.
 bool holdsOpenNiDefault(const sensor_msgs::CameraInfo& info);
 
-/// The camera a depth image stamped `stamp_s` with this camera_info (from `info_topic`) is tracked
-/// with, and in `source` where it came from, for the log. `tum_camera` (~tum_camera) names a TUM
-/// RGB-D camera whose published calibration replaces camera_info's K and D; empty: camera_info, whose
-/// D all zero reads as PinholeCamera::unstatedDistortion says. Throws std::invalid_argument naming
-/// ~tum_camera when that camera does not take images of the info's size, and as toCamera does.
+/// The camera a depth image with this camera_info (from `info_topic`) is tracked with, and in
+/// `source` where it came from, for the log. `tum_camera` (~tum_camera) names a TUM RGB-D camera
+/// whose published calibration replaces camera_info's K and D; empty: camera_info as it is, D all
+/// zero meaning no distortion (when K is a TUM camera's, `source` says so and names ~tum_camera).
+/// Throws std::invalid_argument naming ~tum_camera when that camera does not take images of the
+/// info's size, and as toCamera does.
 sdf_tracker::PinholeCamera trackingCamera(const sensor_msgs::CameraInfo& info, const std::string& info_topic,
-                                          const std::string& tum_camera, double stamp_s, std::string* source);
+                                          const std::string& tum_camera, std::string* source);
 
 geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T);
 Eigen::Isometry3d fromPoseMsg(const geometry_msgs::Pose& pose);
