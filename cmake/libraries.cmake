@@ -16,7 +16,7 @@ add_library(sdf_tracker_eigen INTERFACE)
 target_include_directories(sdf_tracker_eigen SYSTEM INTERFACE ${EIGEN3_INCLUDE_DIR})
 
 # The tracker: Eigen and OpenMP only.
-sdf_tracker_part(util SOURCES frame_memory se3 LINK sdf_tracker_eigen ${SDF_TRACKER_PARALLEL})
+sdf_tracker_part(util SOURCES frame_memory memory se3 LINK sdf_tracker_eigen ${SDF_TRACKER_PARALLEL})
 sdf_tracker_part(camera SOURCES camera depth_image depth_undistortion sensor_model DEPENDS util)
 sdf_tracker_part(map SOURCES block_swap sparse_tsdf_map tsdf_map tsdf_volume DEPENDS util)
 sdf_tracker_part(fusion SOURCES integrator DEPENDS camera map)

@@ -70,9 +70,14 @@ double CommandLine::getDouble(const std::string& name, double fallback) const {
 }
 
 int CommandLine::getInt(const std::string& name, int fallback) const {
-  const double value = getDouble(name, fallback);
-  if (value != std::floor(value) || value < std::numeric_limits<int>::min() || value > std::numeric_limits<int>::max()) {
-    throw std::invalid_argument("--" + name + ": expected a whole number, got \"" + get(name) + "\"");
+  return wholeNumber(getDouble(name, fallback), "--" + name, get(name));
+}
+
+int wholeNumber(double value, const std::string& what, const std::string& text) {
+  // Written so that NaN fails the comparisons.
+  if (!(value == std::floor(value) && value >= std::numeric_limits<int>::min() &&
+        value <= std::numeric_limits<int>::max())) {
+    throw std::invalid_argument(what + ": expected a whole number, got \"" + text + "\"");
   }
   return static_cast<int>(value);
 }

@@ -1,6 +1,7 @@
 #include "sdf_tracker/devices/fakenect_dump.h"
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -52,11 +53,36 @@ void FakenectDumpWriter::finish() {
   finished_ = true;
 }
 
-std::vector<double> readFakenectDepthTimes(const std::string& folder) {
+namespace {
+
+/// Why `path` does not hold a whole depth frame, or "".
+std::string depthFrameProblem(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return "cannot be opened";
+  std::string header;
+  std::getline(in, header);
+  int width = 0, height = 0;
+  if (std::sscanf(header.c_str(), "P5 %d %d", &width, &height) != 2 || width != fakenect::kWidth ||
+      height != fakenect::kHeight) {
+    return "has the header \"" + header.substr(0, 40) + "\", not \"P5 640 480 <maximum>\"";
+  }
+  const uint64_t needed = header.size() + 1 + uint64_t{2} * fakenect::kWidth * fakenect::kHeight;
+  std::error_code error;
+  const uint64_t bytes = fs::file_size(path, error);
+  if (error || bytes < needed) {
+    return "holds " + std::to_string(error ? 0 : bytes) + " bytes of the " + std::to_string(needed) +
+           " a 640x480 frame needs (cut short?)";
+  }
+  return "";
+}
+
+}  // namespace
+
+std::vector<FakenectDepthFrame> readFakenectDepthFrames(const std::string& folder) {
   const std::string path = folder + "/" + fakenect::kIndexFile;
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot open " + path + " (not a fakenect recording?)");
-  std::vector<double> times;
+  std::vector<FakenectDepthFrame> frames;
   std::string line;
   for (int number = 1; std::getline(in, line); ++number) {
     if (line.empty()) continue;
@@ -67,9 +93,14 @@ std::vector<double> readFakenectDepthTimes(const std::string& folder) {
       throw std::runtime_error(path + " line " + std::to_string(number) + ": \"" + line +
                                "\" is not <type>-<seconds>-<timestamp>.<ext>");
     }
-    if (type == 'd') times.push_back(time_s);
+    if (type != 'd') continue;
+    FakenectDepthFrame frame;
+    frame.time_s = time_s;
+    frame.file = folder + "/" + line;
+    frame.problem = depthFrameProblem(frame.file);
+    frames.push_back(std::move(frame));
   }
-  return times;
+  return frames;
 }
 
 }  // namespace sdf_tracker::devices

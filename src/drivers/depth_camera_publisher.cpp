@@ -82,15 +82,23 @@ bool DepthCameraPublisher::hasSubscribers() const {
   return raw_pub_.getNumSubscribers() > 0 || metric_pub_.getNumSubscribers() > 0 || info_pub_.getNumSubscribers() > 0;
 }
 
-void DepthCameraPublisher::useRecordingCalibration(const std::string& recording) {
-  if (url_given_) return;
+bool DepthCameraPublisher::useRecordingCalibration(const std::string& recording) {
+  if (url_given_) return true;
   const std::string file = sdf_tracker::devices::calibrationFileFor(recording);
-  if (std::filesystem::exists(file) && calibration_->loadCameraInfo("file://" + std::filesystem::absolute(file).string())) {
-    ROS_INFO("depth intrinsics from the recording's calibration %s", file.c_str());
-  } else {
+  if (!std::filesystem::exists(file)) {
     ROS_WARN("the recording has no calibration (%s not found): camera_info holds the device's nominal intrinsics; "
              "set ~depth_camera_info_url to use another", file.c_str());
+    return true;
   }
+  if (!calibration_->loadCameraInfo("file://" + std::filesystem::absolute(file).string())) {
+    // The recording states a calibration that cannot be read: nominal intrinsics would be a guess.
+    ROS_FATAL("the recording's calibration %s cannot be read as a camera calibration (corrupt?); repair or remove "
+              "it, or set ~depth_camera_info_url to another",
+              file.c_str());
+    return false;
+  }
+  ROS_INFO("depth intrinsics from the recording's calibration %s", file.c_str());
+  return true;
 }
 
 sensor_msgs::CameraInfo DepthCameraPublisher::cameraInfo(int width, int height,

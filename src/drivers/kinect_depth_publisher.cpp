@@ -12,10 +12,12 @@
 //
 // Replay: under libfreenect's fakenect (FAKENECT_PATH set, and its library first on
 // LD_LIBRARY_PATH, as the `fakenect` wrapper does), frames carry the recording's own stamps and
-// the node ends when the recording does. A live device that stops is re-opened until it is back.
+// the node ends when the recording does; a frame whose file is incomplete is skipped, said by
+// name. A live device that stops is re-opened until it is back.
 
 #include <dlfcn.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <optional>
@@ -79,14 +81,24 @@ class KinectDriver {
     freenect_select_subdevices(context_, FREENECT_DEVICE_CAMERA);
     if (!replay_path_.empty()) {
       try {
-        recording_stamps_ = dev::readFakenectDepthTimes(replay_path_);
+        recording_frames_ = dev::readFakenectDepthFrames(replay_path_);
       } catch (const std::exception& e) {
         ROS_FATAL("kinect_depth_publisher: FAKENECT_PATH=%s: %s", replay_path_.c_str(), e.what());
         return 1;
       }
       ROS_INFO("kinect_depth_publisher: replaying the fakenect recording %s (%zu depth frames)",
-               std::filesystem::absolute(replay_path_).c_str(), recording_stamps_.size());
-      publisher_.useRecordingCalibration(replay_path_);
+               std::filesystem::absolute(replay_path_).c_str(), recording_frames_.size());
+      const auto incomplete = std::count_if(recording_frames_.begin(), recording_frames_.end(),
+                                            [](const dev::FakenectDepthFrame& f) { return !f.problem.empty(); });
+      if (incomplete > 0) {
+        ROS_WARN("kinect_depth_publisher: %ld of the recording's depth frames are incomplete and will be skipped "
+                 "when fakenect plays them",
+                 static_cast<long>(incomplete));
+      }
+      if (!publisher_.useRecordingCalibration(replay_path_)) {
+        freenect_shutdown(context_);
+        return 1;
+      }
     }
     if (!open()) {
       freenect_shutdown(context_);
@@ -196,13 +208,21 @@ class KinectDriver {
   void publish(const uint16_t* data) {
     ros::Time stamp = ros::Time::now();
     if (!replay_path_.empty()) {
-      if (frames_ >= recording_stamps_.size()) {
+      if (frames_ >= recording_frames_.size()) {
         ROS_ERROR_ONCE("kinect_depth_publisher: the recording plays more frames than its INDEX.txt lists");
         return;
       }
-      stamp = ros::Time(recording_stamps_[frames_]);
+      const dev::FakenectDepthFrame& frame = recording_frames_[frames_++];
+      // fakenect hands on whatever the file held: reading a whole frame from it would overrun.
+      if (!frame.problem.empty()) {
+        ROS_ERROR("kinect_depth_publisher: skipped the recording's depth frame %s: it %s", frame.file.c_str(),
+                  frame.problem.c_str());
+        return;
+      }
+      stamp = ros::Time(frame.time_s);
+    } else {
+      ++frames_;
     }
-    ++frames_;
     const size_t n = static_cast<size_t>(mode_.width) * mode_.height;
     depth_mm_.resize(n);
     if (mode_.depth_format == FREENECT_DEPTH_11BIT) {
@@ -215,7 +235,7 @@ class KinectDriver {
   ros::NodeHandle camera_nh_, pnh_;
   sdf_tracker_ros::DepthCameraPublisher publisher_;
   std::string device_id_, replay_path_;
-  std::vector<double> recording_stamps_;
+  std::vector<dev::FakenectDepthFrame> recording_frames_;
   freenect_context* context_ = nullptr;
   freenect_device* device_ = nullptr;
   freenect_frame_mode mode_{};

@@ -85,7 +85,11 @@ class OpenNI2Driver {
       // and published at the recording's own pace (paceLikeTheRecording).
       playback_->setSpeed(kManualPlayback);
       frames_in_recording_ = playback_->getNumberOfFrames(depth_);
-      publisher_.useRecordingCalibration(device_id_);
+      if (!publisher_.useRecordingCalibration(device_id_)) {
+        depth_.destroy();
+        device_.close();
+        return false;
+      }
       ROS_INFO("openni2_depth_publisher: playing %s (%d depth frames, %dx%d)", device_id_.c_str(), frames_in_recording_,
                depth_.getVideoMode().getResolutionX(), depth_.getVideoMode().getResolutionY());
     } else if (!configureLiveCamera()) {

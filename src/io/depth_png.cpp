@@ -24,6 +24,7 @@ std::string PngHeader::describe() const {
 }
 
 PngHeader readPngHeader(const std::string& path) {
+  requireRegularFile(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throwFileError(path, std::string("cannot open: ") + std::strerror(errno));
   unsigned char bytes[26];

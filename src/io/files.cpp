@@ -38,6 +38,13 @@ void AtomicOutput::commit() {
   committed_ = true;
 }
 
+void requireRegularFile(const std::string& path) {
+  struct stat info;
+  if (::stat(path.c_str(), &info) == 0 && !S_ISREG(info.st_mode)) {
+    throwFileError(path, S_ISDIR(info.st_mode) ? "is a folder, not a file" : "is not a regular file (a FIFO or a device?)");
+  }
+}
+
 bool hasExtension(const std::string& path, const std::string& extension) {
   return path.size() > extension.size() && path.compare(path.size() - extension.size(), extension.size(), extension) == 0;
 }

@@ -71,10 +71,13 @@ void writeObj(const std::string& path, const TriangleMesh& mesh) {
 }
 
 void writeMesh(const std::string& path, const TriangleMesh& mesh) {
-  hasExtension(path, ".obj") ? writeObj(path, mesh) : writePly(path, mesh);
+  if (hasExtension(path, ".obj")) return writeObj(path, mesh);
+  if (hasExtension(path, ".ply")) return writePly(path, mesh);
+  throwFileError(path, "unknown mesh file extension (known: .ply, .obj)");
 }
 
 TriangleMesh readPlyMesh(const std::string& path) {
+  requireRegularFile(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throwFileError(path, std::string("cannot open: ") + std::strerror(errno));
   std::string line;

@@ -83,6 +83,7 @@ void writeSparseMap(const std::string& path, const SparseTsdfMap& map) {
 }
 
 SparseTsdfMap readSparseMap(const std::string& path) {
+  requireRegularFile(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throwFileError(path, std::string("cannot open: ") + std::strerror(errno));
   in.seekg(0, std::ios::end);
@@ -114,10 +115,13 @@ SparseTsdfMap readSparseMap(const std::string& path) {
   const uint64_t payload = file_bytes - sizeof(header);
   if (payload < sizeof(uint64_t) || (payload - sizeof(uint64_t)) / block_bytes != header.block_count ||
       (payload - sizeof(uint64_t)) % block_bytes != 0) {
+    // In 64 bits the product may wrap for a count no file could hold: say so rather than a wrong size.
+    const bool representable = header.block_count < (UINT64_MAX - sizeof(uint64_t)) / block_bytes;
     throwFileError(path, "its header lists " + std::to_string(header.block_count) + " blocks (" +
-                   std::to_string(header.block_count * block_bytes + sizeof(uint64_t)) +
-                   " bytes after the header) but the file holds " + std::to_string(payload) +
-                   " bytes after the header: truncated or not written by this package");
+                             (representable ? std::to_string(header.block_count * block_bytes + sizeof(uint64_t))
+                                            : std::string("more than 2^64")) +
+                             " bytes after the header) but the file holds " + std::to_string(payload) +
+                             " bytes after the header: truncated or not written by this package");
   }
 
   Fnv1a hash;
@@ -136,15 +140,8 @@ SparseTsdfMap readSparseMap(const std::string& path) {
       if (!SparseTsdfMap::inKeyRange(index)) throwFileError(path, where.str() + " lies beyond the map's reach");
       if (map.find(index)) throwFileError(path, where.str() + " appears twice");
       for (int v = 0; v < kBlockVoxels; ++v) {
-        const Voxel& voxel = record->voxels[v];
-        if (!std::isfinite(voxel.distance_m)) {
-          throwFileError(path, where.str() + ", voxel " + std::to_string(v) + ": invalid distance " +
-                         std::to_string(voxel.distance_m));
-        }
-        if (!std::isfinite(voxel.weight) || voxel.weight < 0.0f) {
-          throwFileError(path, where.str() + ", voxel " + std::to_string(v) + ": invalid weight " +
-                         std::to_string(voxel.weight) + " (must be finite and at least 0)");
-        }
+        const std::string problem = voxelProblem(record->voxels[v], config.positive_truncation_m);
+        if (!problem.empty()) throwFileError(path, where.str() + ", voxel " + std::to_string(v) + ": " + problem);
       }
       std::copy(record->voxels, record->voxels + kBlockVoxels, map.allocate(index).voxels.begin());
     }

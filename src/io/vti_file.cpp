@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 
 #include "sdf_tracker/io/files.h"
+#include "sdf_tracker/util/memory.h"
 
 namespace sdf_tracker::io {
 
@@ -63,6 +64,7 @@ void writeVti(const std::string& path, const TsdfVolume& volume) {
     << "        <DataArray type=\"Float32\" Name=\"weight\" format=\"appended\" offset=\""
     << array_bytes + sizeof(uint64_t) << "\"/>\n"
     << "      </PointData>\n    </Piece>\n  </ImageData>\n  <AppendedData encoding=\"raw\">\n   _";
+  requireMemory(volume.voxelCount() * sizeof(float), "writing " + path);
   std::vector<float> buffer(volume.voxelCount());
   for (int field = 0; field < 2; ++field) {
     for (size_t i = 0; i < buffer.size(); ++i) {
@@ -77,6 +79,7 @@ void writeVti(const std::string& path, const TsdfVolume& volume) {
 }
 
 TsdfVolume readVti(const std::string& path, bool compact_voxels) {
+  requireRegularFile(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throwFileError(path, std::string("cannot open: ") + std::strerror(errno));
   in.seekg(0, std::ios::end);
@@ -130,6 +133,8 @@ TsdfVolume readVti(const std::string& path, bool compact_voxels) {
                    std::to_string(2 * array_bytes) + " bytes of data) but it holds " +
                    std::to_string(file_bytes > data_start ? file_bytes - data_start : 0) + " bytes after the header");
   }
+  requireMemory(voxel_count * (2 * sizeof(float) + (compact_voxels ? sizeof(CompactVoxel) : sizeof(Voxel))),
+                path + ": its " + std::to_string(voxel_count) + " voxels");
   try {
     TsdfVolume volume(config);
     std::vector<float> distances(voxel_count), values(voxel_count);
@@ -145,14 +150,13 @@ TsdfVolume readVti(const std::string& path, bool compact_voxels) {
       std::vector<float>& target = field == 0 ? distances : values;
       in.read(reinterpret_cast<char*>(target.data()), static_cast<std::streamsize>(array_bytes));
       if (!in) throwFileError(path, "file is truncated inside the voxel data");
-      for (size_t i = 0; i < voxel_count; ++i) {
-        if (!std::isfinite(target[i]) || (field == 1 && target[i] < 0.0f)) {
-          throwFileError(path, std::string(field == 0 ? "distance" : "weight") + " of voxel " + std::to_string(i) +
-                         " is invalid (" + std::to_string(target[i]) + ")");
-        }
-      }
     }
-    for (size_t i = 0; i < voxel_count; ++i) volume.setVoxel(i, Voxel{distances[i], values[i]});
+    for (size_t i = 0; i < voxel_count; ++i) {
+      const Voxel voxel{distances[i], values[i]};
+      const std::string problem = voxelProblem(voxel, config.positive_truncation_m);
+      if (!problem.empty()) throwFileError(path, "voxel " + std::to_string(i) + ": " + problem);
+      volume.setVoxel(i, voxel);
+    }
     return volume;
   } catch (const std::bad_alloc&) {
     throwFileError(path, "not enough memory for its " + std::to_string(voxel_count) + " voxels");

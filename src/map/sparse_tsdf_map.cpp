@@ -215,6 +215,14 @@ TsdfVolume toDenseVolume(const TsdfMap& map) {
 }
 
 TsdfVolume toDenseVolume(const TsdfMap& map, const Eigen::AlignedBox3d& region_W) {
+  const DenseRegion region = denseRegionOf(map, region_W);
+  if (map.type() == MapType::kSparse) return static_cast<const SparseTsdfMap&>(map).toDense(region.first, region.dims);
+  const auto& dense = static_cast<const TsdfVolume&>(map);
+  return cropOf(map.config(), region.first, region.dims,
+                [&dense](const Eigen::Vector3i& v) { return dense.voxel(v.x(), v.y(), v.z()); });
+}
+
+DenseRegion denseRegionOf(const TsdfMap& map, const Eigen::AlignedBox3d& region_W) {
   const VolumeConfig& c = map.config();
   // The lattice voxels inside the box: from the first at or above its minimum to the last at or
   // below its maximum.
@@ -234,10 +242,12 @@ TsdfVolume toDenseVolume(const TsdfMap& map, const Eigen::AlignedBox3d& region_W
     msg << (map.type() == MapType::kDense ? " inside its grid" : "") << "; a volume needs 2 to 4096 along each axis";
     throw std::invalid_argument(msg.str());
   }
-  const Eigen::Vector3i first = lo.cast<int>();
-  if (map.type() == MapType::kSparse) return static_cast<const SparseTsdfMap&>(map).toDense(first, dims.cast<int>());
-  const auto& dense = static_cast<const TsdfVolume&>(map);
-  return cropOf(c, first, dims.cast<int>(), [&dense](const Eigen::Vector3i& v) { return dense.voxel(v.x(), v.y(), v.z()); });
+  return {lo.cast<int>(), dims.cast<int>()};
+}
+
+uint64_t DenseRegion::bytes(const VolumeConfig& config) const {
+  return static_cast<uint64_t>(dims.x()) * dims.y() * dims.z() *
+         (config.compact_voxels ? sizeof(CompactVoxel) : sizeof(Voxel));
 }
 
 SparseTsdfMap toSparseMap(const TsdfMap& map) {

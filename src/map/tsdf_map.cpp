@@ -1,6 +1,7 @@
 #include "sdf_tracker/map/tsdf_map.h"
 
 #include <atomic>
+#include <cmath>
 #include <sstream>
 #include <utility>
 
@@ -18,12 +19,32 @@ const char* toString(MapType type) {
   return "unknown";
 }
 
+std::string voxelProblem(const Voxel& voxel, double positive_truncation_m) {
+  // The truncation is stored in double and clamped to in float (compact voxels round to its
+  // 1/32767th): allow for the rounding.
+  const double highest_m = positive_truncation_m * (1.0 + 1e-4);
+  std::ostringstream s;
+  if (!(voxel.distance_m >= -kMaxTruncationDistance_m && voxel.distance_m <= highest_m)) {
+    s << "distance " << voxel.distance_m << " m is not within [" << -kMaxTruncationDistance_m << ", "
+      << positive_truncation_m << "] m";
+  } else if (!(voxel.weight >= 0.0f && voxel.weight <= kMaxVoxelWeight)) {
+    s << "weight " << voxel.weight << " is not within [0, " << kMaxVoxelWeight << "]";
+  }
+  return s.str();
+}
+
 std::vector<std::string> VolumeConfig::validate() const {
   Violations v;
   v.requirePositive("voxel_size_m", voxel_size_m);
-  v.requireFinite("origin_W.x", origin_W.x());
-  v.requireFinite("origin_W.y", origin_W.y());
-  v.requireFinite("origin_W.z", origin_W.z());
+  // Positions are 32-bit floats: 2^23 voxels out, one float step is a voxel.
+  const double reach_m = (voxel_size_m > 0.0 && std::isfinite(voxel_size_m) ? voxel_size_m : 0.0) * (1 << 23);
+  const char* axes[3] = {"origin_W.x", "origin_W.y", "origin_W.z"};
+  for (int axis = 0; axis < 3; ++axis) {
+    std::ostringstream rule;
+    rule << axes[axis] << " must lie within " << reach_m << " m of the world's origin (2^23 voxels: farther out, 32-bit "
+         << "positions no longer tell neighbouring voxels apart) (got " << origin_W[axis] << ")";
+    v.require(std::fabs(origin_W[axis]) <= reach_m, rule.str());
+  }
   v.requirePositive("positive_truncation_m", positive_truncation_m);
   if (type == MapType::kSparse) {
     v.require(!compact_voxels, "compact_voxels applies to the dense grid only");

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 
+#include "sdf_tracker/util/memory.h"
 #include "sdf_tracker/util/validation.h"
 
 namespace sdf_tracker {
@@ -12,6 +14,9 @@ TsdfVolume::TsdfVolume(const VolumeConfig& config) : TsdfMap(config, MapType::kD
   stride_y_ = static_cast<size_t>(config.dims.x());
   stride_z_ = stride_y_ * config.dims.y();
   voxel_count_ = stride_z_ * config.dims.z();
+  std::ostringstream grid;
+  grid << "a dense grid of " << config.dims.x() << "x" << config.dims.y() << "x" << config.dims.z() << " voxels";
+  requireMemory(voxel_count_ * (compact() ? sizeof(CompactVoxel) : sizeof(Voxel)), grid.str());
   clear();
 }
 

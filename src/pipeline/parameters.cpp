@@ -213,10 +213,10 @@ std::vector<ParameterSpec> buildTable() {
                            [axis](auto& s) -> auto& { return s.pipeline.volume.dims[axis]; }));
   }
   t.push_back(bound<double>("PositiveTruncationDistance", "m", "Dmax: distances are clamped to at most this",
-                            leftOpen(0.0, 10.0), {0.1, 0.1, 0.08}, kAtStart, kAll,
+                            leftOpen(0.0, kMaxTruncationDistance_m), {0.1, 0.1, 0.08}, kAtStart, kAll,
                             [](auto& s) -> auto& { return s.pipeline.volume.positive_truncation_m; }));
   t.push_back(bound<double>("NegativeTruncationDistance", "m", "Dmin: voxels further behind the surface are not updated",
-                            rightOpen(-10.0, 0.0), {-0.06, -0.06, -0.04}, kLive, kAll,
+                            rightOpen(-kMaxTruncationDistance_m, 0.0), {-0.06, -0.06, -0.04}, kLive, kAll,
                             [](auto& s) -> auto& { return s.pipeline.integrator.negative_truncation_m; }));
   t.push_back(bound<double>("RobustStatisticCoefficient", "", "Huber threshold as a fraction of Dmax",
                             leftOpen(0.0, 10.0), same(0.02), kLive, kAll,
@@ -232,7 +232,7 @@ std::vector<ParameterSpec> buildTable() {
   t.push_back(bound<int>("MaximumRaycastSteps", "", "steps when refining a measured depth (image_denoised)",
                          closed(0, 10000), same(12), kLive, kAll,
                          [](auto& s) -> auto& { return s.pipeline.raycast.max_refinement_steps; }));
-  t.push_back(bound<double>("MaxWeight", "", "Wmax, the weight cap of the running average", leftOpen(0.0, 1e9),
+  t.push_back(bound<double>("MaxWeight", "", "Wmax, the weight cap of the running average", leftOpen(0.0, kMaxVoxelWeight),
                             same(64.0), kLive, kAll, [](auto& s) -> auto& { return s.pipeline.integrator.max_weight; }));
   t.push_back(bound<int>("ImageWidth", "px", "image width (640, 320 or 160); scales the intrinsics", closed(1, 10000),
                          same(640), kAtStart, kNodeOnly, [](auto& s) -> auto& { return s.camera.image_width; }));
@@ -416,6 +416,11 @@ std::vector<std::string> Settings::withoutEffect(const std::vector<std::string>&
                       "with the scene wherever the camera goes; set MapType=dense for one grid sized and placed "
                       "by them");
     }
+  }
+  const bool swap_directory_given = std::find(given.begin(), given.end(), "SwapDirectory") != given.end();
+  if (swap_directory_given && !(pipeline.max_map_memory_mb > 0.0)) {
+    notes.push_back("SwapDirectory=" + pipeline.swap_directory + " has no effect without MaxMemoryMB, the bound "
+                    "beyond which blocks go to a swap file there; set MaxMemoryMB too");
   }
   return notes;
 }

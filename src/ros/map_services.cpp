@@ -1,7 +1,13 @@
 #include "sdf_tracker/ros/map_services.h"
 
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <sstream>
+#include <stdexcept>
+
+#include <unistd.h>
 
 #include "sdf_tracker/io/files.h"
 #include "sdf_tracker/io/map_file.h"
@@ -15,9 +21,36 @@ namespace sdf_tracker_ros {
 
 namespace st = sdf_tracker;
 
+namespace {
+
+/// Throws std::invalid_argument naming `parameter` when `path` could not be written: its folder
+/// is missing or not writable.
+void requireWritableFolder(const std::string& parameter, const std::string& path) {
+  const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+  const std::string name = folder.empty() ? std::string(".") : folder.string();
+  std::error_code error;
+  if (!std::filesystem::is_directory(name, error)) {
+    throw std::invalid_argument(parameter + " \"" + path + "\": the folder " + name + " does not exist");
+  }
+  if (::access(name.c_str(), W_OK) != 0) {
+    throw std::invalid_argument(parameter + " \"" + path + "\": cannot write in " + name + ": " + std::strerror(errno));
+  }
+}
+
+}  // namespace
+
 MapServices::MapServices(ros::NodeHandle pnh, TrackerState& state, const NodeOptions& options,
                          std::function<Eigen::Isometry3d()> T_map_W)
     : state_(state), options_(options), T_map_W_(std::move(T_map_W)) {
+  // A file that could not be written at shut-down is refused now, not after the run.
+  const std::vector<std::pair<std::string, std::string>> outputs = {
+      {"~trajectory_file", options_.trajectory_file}, {"~mesh_file", options_.mesh_file},
+      {"~cloud_file", options_.cloud_file},
+      {"~OutputTriangles (in ~output_directory)", options_.output_triangles ? outputPath("", "triangles.obj") : ""},
+      {"~OutputVolume (in ~output_directory)", options_.output_volume ? outputPath("", "sdf_volume.vti") : ""}};
+  for (const auto& [parameter, path] : outputs) {
+    if (!path.empty()) requireWritableFolder(parameter, path);
+  }
   reset_srv_ = pnh.advertiseService("reset", &MapServices::reset, this);
   save_mesh_srv_ = pnh.advertiseService("save_mesh", &MapServices::saveMesh, this);
   save_volume_srv_ = pnh.advertiseService("save_volume", &MapServices::saveVolume, this);
@@ -48,27 +81,43 @@ void MapServices::writeTrajectory(const std::vector<st::io::StampedPose>& trajec
   ROS_INFO("sdf_tracker: wrote %zu poses to %s", trajectory.size(), options_.trajectory_file.c_str());
 }
 
-void MapServices::writeAtShutdown() {
+
+bool MapServices::writeAtShutdown() {
   std::vector<st::io::StampedPose> trajectory;
   const std::unique_ptr<st::TsdfMap> map = copyMap(&trajectory);
-  auto attempt = [](const char* what, const std::function<void()>& write) {
+  bool all_written = true;
+  auto attempt = [&all_written](const char* what, const std::string& path, const std::function<void()>& write) {
     try {
       write();
+      std::printf("sdf_tracker: wrote the %s to %s\n", what, path.c_str());
     } catch (const std::exception& e) {
-      ROS_ERROR("sdf_tracker: at shut-down, writing the %s failed: %s", what, e.what());
+      std::fprintf(stderr, "sdf_tracker: at shut-down, writing the %s failed: %s\n", what, e.what());
+      all_written = false;
     }
   };
-  attempt("trajectory", [&] { writeTrajectory(trajectory); });
+  if (!options_.trajectory_file.empty()) {
+    attempt("trajectory", options_.trajectory_file,
+            [&] { st::io::writeTrajectory(options_.trajectory_file, trajectory); });
+  }
   const bool need_mesh = !options_.mesh_file.empty() || options_.output_triangles;
   const st::TriangleMesh mesh = need_mesh ? st::extractMesh(*map) : st::TriangleMesh();
-  if (!options_.mesh_file.empty()) attempt("mesh", [&] { st::io::writePly(options_.mesh_file, mesh); });
+  if (!options_.mesh_file.empty()) {
+    attempt("mesh", options_.mesh_file, [&] { st::io::writePly(options_.mesh_file, mesh); });
+  }
   if (!options_.cloud_file.empty()) {
-    attempt("cloud", [&] { st::io::writePly(options_.cloud_file, st::extractSurfaceCloud(*map)); });
+    attempt("cloud", options_.cloud_file,
+            [&] { st::io::writePly(options_.cloud_file, st::extractSurfaceCloud(*map)); });
   }
-  if (options_.output_triangles) attempt("triangles", [&] { st::io::writeObj(outputPath("", "triangles.obj"), mesh); });
+  if (options_.output_triangles) {
+    const std::string path = outputPath("", "triangles.obj");
+    attempt("triangles", path, [&] { st::io::writeObj(path, mesh); });
+  }
   if (options_.output_volume) {
-    attempt("volume", [&] { st::io::writeMap(outputPath("", "sdf_volume.vti"), *map); });
+    const std::string path = outputPath("", "sdf_volume.vti");
+    attempt("volume", path, [&] { st::io::writeMap(path, *map); });
   }
+  std::fflush(stdout);
+  return all_written;
 }
 
 template <typename Response>

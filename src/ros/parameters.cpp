@@ -151,6 +151,19 @@ void readParameters(const ros::NodeHandle& pnh, st::Settings* settings, NodeOpti
       errors.require(false, std::string("~") + e.what());
     }
   }
+  // The frames of the tree this node publishes into: map names one, and no two are the same.
+  const FrameOptions& f = options->frames;
+  errors.require(!f.map_frame.empty(), "~map_frame must name a frame (got \"\")");
+  const std::vector<std::pair<const char*, std::string>> frames = {
+      {"map_frame", f.map_frame}, {"odom_frame", f.odom_frame}, {"base_frame", f.base_frame},
+      {"camera_frame", f.camera_frame}};
+  for (size_t a = 0; a < frames.size(); ++a) {
+    for (size_t b = a + 1; b < frames.size(); ++b) {
+      errors.require(frames[a].second.empty() || frames[a].second != frames[b].second,
+                     std::string("~") + frames[a].first + " and ~" + frames[b].first + " are both \"" +
+                         frames[a].second + "\": a frame cannot be its own parent");
+    }
+  }
   errors.require(
       options->tum_camera.empty() || !options->intrinsics_from_parameters,
       "~tum_camera (" + options->tum_camera + ") and FocalLength/CenterPoint both give the intrinsics: set one");

@@ -1,5 +1,7 @@
 #include "sdf_tracker/ros/pose_broadcaster.h"
 
+#include <cmath>
+#include <optional>
 #include <stdexcept>
 
 #include <tf2_eigen/tf2_eigen.h>
@@ -24,8 +26,14 @@ Eigen::Isometry3d mapFromOpticalWorld() {
   return T;
 }
 
+bool isGravityReading(const Eigen::Vector3d& acceleration) {
+  const double magnitude = acceleration.norm();  // NaN or infinite for a reading that is not finite
+  return magnitude >= kMinGravityReading && magnitude <= kMaxGravityReading;
+}
+
 Eigen::Isometry3d gravityAlignedMapFromOpticalWorld(const Eigen::Vector3d& up_W) {
-  if (!(up_W.norm() > 0.0) || !up_W.allFinite()) {
+  const double length = up_W.norm();
+  if (!(length > 0.0 && std::isfinite(length))) {
     throw std::invalid_argument("gravity: the up direction is zero or not finite");
   }
   const Eigen::Vector3d z = up_W.normalized();
@@ -61,7 +69,11 @@ void PoseBroadcaster::onImu(const sensor_msgs::ImuConstPtr& imu) {
   if (map_frame_fixed_) return;
   const auto& a = imu->linear_acceleration;
   const Eigen::Vector3d accel(a.x, a.y, a.z);
-  if (!accel.allFinite()) return;
+  if (!isGravityReading(accel)) {
+    ++refused_readings_;
+    last_refused_magnitude_ = accel.norm();
+    return;
+  }
   accelerations_.emplace_back(imu->header.stamp, accel);
   while (accelerations_.front().first.toSec() < imu->header.stamp.toSec() - kLevellingWindow_s) {
     accelerations_.pop_front();
@@ -96,25 +108,39 @@ Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::st
   const std::string camera_frame = frames_.camera_frame.empty() ? stripSlash(image_frame) : frames_.camera_frame;
   std::unique_lock<std::mutex> lock(mutex_);
   if (!map_frame_fixed_) {
-    if (imu_sub_ && accelerations_.empty()) {
+    if (imu_sub_ && accelerations_.empty() && refused_readings_ > 0) {
+      ROS_WARN("sdf_tracker: none of the %zu messages on %s before the first frame reads like gravity "
+               "(|linear_acceleration| must lie within %.0f-%.0f m/s^2; the last: %g m/s^2): the map frame is not "
+               "levelled",
+               refused_readings_, imu_sub_.getTopic().c_str(), kMinGravityReading, kMaxGravityReading,
+               last_refused_magnitude_);
+    } else if (imu_sub_ && accelerations_.empty()) {
       ROS_WARN("sdf_tracker: no message on %s before the first frame: the map frame is not levelled",
                imu_sub_.getTopic().c_str());
     } else if (imu_sub_) {
+      std::optional<Eigen::Isometry3d> T_C_I;
       try {
-        const Eigen::Isometry3d T_C_I =
-            tf2::transformToEigen(tf_buffer_.lookupTransform(camera_frame, imu_frame_, ros::Time(0)));
+        T_C_I = tf2::transformToEigen(tf_buffer_.lookupTransform(camera_frame, imu_frame_, ros::Time(0)));
+      } catch (const tf2::TransformException& e) {
+        ROS_WARN("sdf_tracker: cannot level the map frame: no tf from the IMU's frame '%s' to the camera frame "
+                 "'%s' (%s); the map frame is the first camera pose in REP 103 axes",
+                 imu_frame_.c_str(), camera_frame.c_str(), e.what());
+      }
+      if (T_C_I) {
         // At the first frame the tracker's world is the camera's optical frame (T_W_C = I).
         Eigen::Vector3d mean_I = Eigen::Vector3d::Zero();
         for (const auto& sample : accelerations_) mean_I += sample.second;
         mean_I /= static_cast<double>(accelerations_.size());
-        const Eigen::Vector3d up_W = T_W_C.linear() * T_C_I.linear() * mean_I;
-        T_map_W_ = gravityAlignedMapFromOpticalWorld(up_W);
-        ROS_INFO("sdf_tracker: map frame levelled with the %zu IMU samples of the last %.1f s", accelerations_.size(),
-                 kLevellingWindow_s);
-      } catch (const std::exception& e) {
-        ROS_WARN("sdf_tracker: cannot level the map frame: no tf from the IMU's frame '%s' to the camera frame "
-                 "'%s' (%s); the map frame is the first camera pose in REP 103 axes",
-                 imu_frame_.c_str(), camera_frame.c_str(), e.what());
+        const Eigen::Vector3d up_W = T_W_C.linear() * T_C_I->linear() * mean_I;
+        if (isGravityReading(up_W)) {
+          T_map_W_ = gravityAlignedMapFromOpticalWorld(up_W);
+          ROS_INFO("sdf_tracker: map frame levelled with the %zu IMU samples of the last %.1f s",
+                   accelerations_.size(), kLevellingWindow_s);
+        } else {  // readings that cancel out: a camera shaken, not held
+          ROS_WARN("sdf_tracker: the %zu IMU samples of the last %.1f s average to %g m/s^2, not gravity: the map "
+                   "frame is not levelled",
+                   accelerations_.size(), kLevellingWindow_s, up_W.norm());
+        }
       }
     }
     map_frame_fixed_ = true;
@@ -159,6 +185,13 @@ Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::st
     transforms.back().header.frame_id = parent;
     transforms.back().child_frame_id = frames_.odom_frame;
     parent = frames_.odom_frame;
+  }
+  if (base == parent || base == frames_.map_frame) {
+    ROS_ERROR_ONCE("sdf_tracker: the image's frame '%s' is also ~%s: a frame cannot be its own parent, so this node "
+                   "publishes no tf (pose and path go on). Set ~map_frame%s to a frame of its own.",
+                   base.c_str(), base == frames_.map_frame ? "map_frame" : "odom_frame",
+                   base == frames_.map_frame ? "" : " or ~odom_frame");
+    return T_map_C;
   }
   if (!mayPublishParentOf(base, parent)) return T_map_C;
   transforms.push_back(tf2::eigenToTransform(T_map_base));

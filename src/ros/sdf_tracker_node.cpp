@@ -13,6 +13,8 @@ int main(int argc, char** argv) {
   try {
     sdf_tracker_ros::TrackerServer server(ros::NodeHandle(), ros::NodeHandle("~"));
     ros::spin();
+    // A file the user asked for that could not be written is a failed run.
+    return server.finish() ? 0 : 1;
   } catch (const std::exception& e) {
     // Also straight to stderr: rosconsole has been seen to drop the message when the node
     // exits right after it.
@@ -20,5 +22,4 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "sdf_tracker_node: %s\n", e.what());
     return 1;
   }
-  return 0;
 }

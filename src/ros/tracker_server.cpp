@@ -104,7 +104,10 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
                                                       : f.base_frame.c_str());
 }
 
-TrackerServer::~TrackerServer() {
+TrackerServer::~TrackerServer() { finish(); }
+
+bool TrackerServer::finish() {
+  if (finished_) return *finished_;
   {
     std::lock_guard<std::mutex> lock(mailbox_mutex_);
     stopping_ = true;
@@ -119,7 +122,8 @@ TrackerServer::~TrackerServer() {
               "mean %.1f ms\n",
               frames_received_, ms.size(), frames_dropped_, ms.empty() ? 0.0 : ms[ms.size() / 2],
               ms.empty() ? 0.0 : std::accumulate(ms.begin(), ms.end(), 0.0) / ms.size());
-  services_->writeAtShutdown();
+  finished_ = services_->writeAtShutdown();
+  return *finished_;
 }
 
 void TrackerServer::onFrame(const sensor_msgs::ImageConstPtr& image, const sensor_msgs::CameraInfoConstPtr& info) {

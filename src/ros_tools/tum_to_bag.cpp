@@ -16,10 +16,15 @@
 // camera's calibration (the node's ~tum_camera gives that).
 // The bag is written to a temporary file and renamed when complete: a failure leaves no bag.
 
+#include <sys/statvfs.h>
+
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <sstream>
 
 #include <geometry_msgs/TransformStamped.h>
@@ -130,6 +135,25 @@ sensor_msgs::Image readColourImage(const std::string& path, const std_msgs::Head
   return msg;
 }
 
+/// About how many bytes the bag of `sequence` takes: its depth images as 32-bit floats and its
+/// colour images as 8-bit RGB, which is nearly all of it.
+uint64_t estimatedBagBytes(const st::TumSequence& sequence, size_t colour_images) {
+  const uint64_t pixels = static_cast<uint64_t>(sequence.camera().width) * sequence.camera().height;
+  return sequence.size() * pixels * 4 + colour_images * pixels * 3;
+}
+
+/// Throws std::runtime_error when the file system of `path` has less than `bytes` free.
+void requireFreeSpace(const std::string& path, uint64_t bytes) {
+  const std::filesystem::path folder = std::filesystem::absolute(path).parent_path();
+  struct statvfs disk;
+  if (::statvfs(folder.c_str(), &disk) != 0) return;  // the open below then says what is wrong
+  const uint64_t free_bytes = static_cast<uint64_t>(disk.f_bavail) * disk.f_frsize;
+  if (free_bytes < bytes) {
+    throw std::runtime_error(path + ": the bag needs about " + std::to_string(bytes >> 20) + " MiB, but " +
+                             folder.string() + " has " + std::to_string(free_bytes >> 20) + " MiB free");
+  }
+}
+
 int run(int argc, char** argv) {
   const st::tools::CommandLine args(argc, argv, {"frames"}, {"help", "openni-default-intrinsics"},
                                     {"SEQUENCE_DIR", "OUT.bag"});
@@ -156,8 +180,13 @@ int run(int argc, char** argv) {
     return camera;
   };
 
+  requireFreeSpace(out, estimatedBagBytes(sequence, colour.size()));
+  // On a failed write the bag is let go without destroying it: its destructor would write its
+  // index to the same full disk and throw again, which ends the process.
+  auto bag_owner = std::make_unique<rosbag::Bag>();
+  rosbag::Bag& bag = *bag_owner;
   try {
-    rosbag::Bag bag(temporary, rosbag::bagmode::Write);
+    bag.open(temporary, rosbag::bagmode::Write);
     auto stamp = [offset_s](double t) { return ros::Time(t + offset_s); };
     // Every stream in time order up to each depth frame, so playback interleaves them as recorded.
     size_t gt_index = 0, colour_index = 0, accel_index = 0;
@@ -215,9 +244,10 @@ int run(int argc, char** argv) {
     }
     writeUpTo(t_end + 0.1);  // the ground truth and chain just past the last frame
     bag.close();
-  } catch (...) {
+  } catch (const std::exception& e) {
+    bag_owner.release();
     std::remove(temporary.c_str());
-    throw;
+    throw std::runtime_error(out + ": writing the bag failed (" + e.what() + "); nothing was left behind");
   }
   if (std::rename(temporary.c_str(), out.c_str()) != 0) {
     std::remove(temporary.c_str());

@@ -32,6 +32,7 @@
 #include "sdf_tracker/surface/raycaster.h"
 #include "sdf_tracker/surface/surface.h"
 #include "sdf_tracker/util/frame_memory.h"
+#include "sdf_tracker/util/memory.h"
 #include "sdf_tracker/util/validation.h"
 
 namespace st = sdf_tracker;
@@ -95,8 +96,26 @@ st::PinholeCamera parseIntrinsics(const std::string& text, const st::PinholeCame
   }
   st::PinholeCamera camera = base;
   camera.fx = v[0], camera.fy = v[1], camera.cx = v[2], camera.cy = v[3];
-  if (v.size() == 6) camera.width = static_cast<int>(v[4]), camera.height = static_cast<int>(v[5]);
+  if (v.size() == 6) {
+    camera.width = st::tools::wholeNumber(v[4], "--intrinsics: the width W", text);
+    camera.height = st::tools::wholeNumber(v[5], "--intrinsics: the height H", text);
+  }
   return camera;
+}
+
+/// Checks before tracking that --volume-region can be exported at the end: that it holds a grid
+/// and that the grid and its write buffer fit in the memory there is now.
+void requireExportable(const st::TsdfMap& map, const Eigen::AlignedBox3d& region_W, const std::string& text) {
+  try {
+    const st::DenseRegion region = st::denseRegionOf(map, region_W);
+    const uint64_t voxels = static_cast<uint64_t>(region.dims.x()) * region.dims.y() * region.dims.z();
+    std::ostringstream grid;
+    grid << "--volume-region " << text << " (a grid of " << region.dims.x() << "x" << region.dims.y() << "x"
+         << region.dims.z() << " voxels and its file buffer)";
+    st::requireMemory(region.bytes(map.config()) + voxels * sizeof(float), grid.str());
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("--volume-region " + text + ": " + e.what());
+  }
 }
 
 Eigen::AlignedBox3d parseRegion(const std::string& text) {
@@ -267,6 +286,7 @@ int run(int argc, char** argv) {
     st::throwIfInvalid("parameters with the grid of " + args.get("load-volume"),
                        st::Settings{pipeline.config(), settings.camera}.validate());
   }
+  if (volume_region) requireExportable(pipeline.map(), *volume_region, args.get("volume-region"));
   const auto& v = pipeline.config().volume;
   std::cout << "preset " << args.get("preset", "default") << ": " << v.describe()
             << (args.has("load-volume") ? " (from " + args.get("load-volume") + ")" : std::string()) << ", truncation "
@@ -279,6 +299,11 @@ int run(int argc, char** argv) {
   std::vector<st::io::StampedPose> trajectory;
   std::vector<double> frame_ms, tracking_ms, fusion_ms, raycast_ms;
   size_t failed = 0, degenerate = 0;
+  size_t tracked_in_map = 0;  // frames tracked against a map (not the one that started it)
+  size_t unreadable = 0;      // frames whose image could not be read
+  size_t swap_errors = 0;     // frames whose blocks could not be swapped (MaxMemoryMB)
+  std::string first_swap_error;
+  std::string first_unreadable;
   st::tools::ProgressBar progress(sequence.size(), !args.has("quiet"));
   const auto start = std::chrono::steady_clock::now();
   std::vector<double> single_frame_errors_m;  // --fuse-ground-truth
@@ -288,13 +313,31 @@ int run(int argc, char** argv) {
       ++without_ground_truth;
       continue;
     }
-    const st::DepthImage depth = sequence.depth(i);
+    std::optional<st::DepthImage> read;
+    try {
+      read = sequence.depth(i);
+    } catch (const std::runtime_error& e) {
+      // As the node does with a bad image: this frame is bad input, the run goes on.
+      std::string message = e.what();
+      std::cerr << "\nframe " << i << ": " << message << ": skipped\n";
+      if (unreadable++ == 0) first_unreadable = message;
+      ++failed;
+      trajectory.push_back({sequence.timestamp(i), pipeline.pose()});
+      std::replace(message.begin(), message.end(), ',', ';');
+      frames_csv << std::fixed << std::setprecision(6) << sequence.timestamp(i) << ','
+                 << st::toString(st::TrackStatus::kBadInput) << ",,0,0,0,0,0,0,0,0," << std::setprecision(3)
+                 << pipeline.map().memoryBytes() / 1048576.0 << ',' << message << '\n';
+      progress.update(i + 1);
+      continue;
+    }
+    const st::DepthImage& depth = *read;
     const st::FrameReport report = true_T_W_C.empty()
                                        ? pipeline.processFrame(depth, camera, sequence.timestamp(i))
                                        : pipeline.processFrameAtPose(depth, camera, *true_T_W_C[i], sequence.timestamp(i));
     const st::TrackResult& t = report.track;
     if (!t.tracked()) ++failed;
     if (t.tracked() && t.status == st::TrackStatus::kDegenerate) ++degenerate;
+    if (t.tracked() && !report.initialised_map) ++tracked_in_map;
     // The estimate: with --fuse-ground-truth, where the tracker took the frame, not the fused pose.
     trajectory.push_back({sequence.timestamp(i), true_T_W_C.empty() ? pipeline.pose() : t.T_W_C});
     if (!true_T_W_C.empty() && !report.initialised_map && t.tracked()) {
@@ -316,7 +359,11 @@ int run(int argc, char** argv) {
     if (!report.swap_warning.empty()) std::cerr << "\nframe " << i << ": warning: " << report.swap_warning << "\n";
     std::string message = t.message;
     if (!report.swap_error.empty()) {
-      std::cerr << "\nframe " << i << ": " << report.swap_error << "\n";
+      // Said once as it happens (every frame after it may fail alike); each frame's is in frames.csv.
+      if (swap_errors++ == 0) {
+        first_swap_error = report.swap_error;
+        std::cerr << "\nframe " << i << ": " << report.swap_error << " (later swap errors: frames.csv)\n";
+      }
       message += (message.empty() ? "" : "; ") + report.swap_error;
     }
     std::replace(message.begin(), message.end(), ',', ';');
@@ -349,13 +396,19 @@ int run(int argc, char** argv) {
   ::getrusage(RUSAGE_SELF, &usage);
   const double peak_rss_mb = usage.ru_maxrss / 1024.0;  // Linux reports kilobytes
 
-  // Every frame after the first is tracked against the map the first one started.
-  const size_t tracked = sequence.size() - failed - 1;
+  // A run fails when no frame was tracked against a map: one the first frame started, or a loaded
+  // one (then the first frame is tracked in it too). A single frame starting a map is no failure.
+  const bool nothing_tracked = tracked_in_map == 0 && (sequence.size() > 1 || args.has("load-volume"));
   std::ostringstream summary;
   summary << std::fixed << std::setprecision(2);
-  summary << "frames " << sequence.size() << ", tracked ok " << sequence.size() - failed - degenerate;
+  const size_t processed = sequence.size() - without_ground_truth;
+  summary << "frames " << sequence.size() << ", tracked ok " << processed - failed - degenerate;
   if (degenerate > 0) summary << ", degenerate " << degenerate << " (solved where the geometry constrains the pose)";
   summary << ", failed " << failed << "\n";
+  if (unreadable > 0) {
+    summary << unreadable << " frame" << (unreadable > 1 ? "s" : "") << " could not be read and counted as failed "
+            << "(bad_input), the first: " << first_unreadable << "\n";
+  }
   summary << "speed " << sequence.size() / elapsed_s << " frames/s including file reading; per frame (ms): median "
           << percentile(frame_ms, 0.5) << ", p95 " << percentile(frame_ms, 0.95) << "; tracking median "
           << percentile(tracking_ms, 0.5) << ", fusion median " << percentile(fusion_ms, 0.5);
@@ -366,6 +419,12 @@ int run(int argc, char** argv) {
             << " blocks, " << budget->swap().bytesOnDisk() / 1048576.0 << " MiB, in the swap file at the end)";
   }
   summary << ", peak resident " << peak_rss_mb << " MiB\n";
+  if (swap_errors > 0) {
+    summary << "swap file failed on " << swap_errors << " frame" << (swap_errors > 1 ? "s" : "")
+            << ", blocks kept in memory (the map ended at " << pipeline.map().memoryBytes() / 1048576.0
+            << " MiB against MaxMemoryMB " << pipeline.config().max_map_memory_mb << "); the first: "
+            << first_swap_error << "\n";
+  }
 
   // The same figures for scripts (bench/), as JSON.
   using st::tools::jsonNumber;
@@ -399,7 +458,10 @@ int run(int argc, char** argv) {
     summary << errors.summaryLine(without_ground_truth);
     if (errors.stats.count > 0) json << ",\n  \"single_frame_error_m\": " << errors.json();
   }
-  if (!sequence.groundTruth().empty()) {
+  if (nothing_tracked) {
+    summary << "no frame could be tracked" << (args.has("load-volume") ? " in the loaded map" : " after the first")
+            << ": accuracy not evaluated\n";
+  } else if (!sequence.groundTruth().empty()) {
     try {
       const auto accuracy = st::tools::evaluateAccuracy(trajectory, sequence.groundTruth());
       summary << st::tools::formatAccuracy(accuracy);
@@ -418,12 +480,11 @@ int run(int argc, char** argv) {
     summary << "no groundtruth.txt: accuracy not evaluated\n";
   }
   json << "\n}\n";
-  if (sequence.size() > 1 && tracked == 0) summary << "no frame could be tracked after the first\n";
   st::io::writeTextFile(output.path("summary.txt"), summary.str());
   st::io::writeTextFile(output.path("summary.json"), json.str());
   output.commit(summaries);
   std::cout << summary.str() << "results in " << output_dir << "\n";
-  return sequence.size() > 1 && tracked == 0 ? 1 : 0;
+  return nothing_tracked ? 1 : 0;
 }
 
 }  // namespace

@@ -6,9 +6,11 @@
 
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
+#include <cstdlib>
+#include <fstream>
 
 #include "node_test.h"
+#include "run_command.h"
 
 namespace node_test {
 namespace {
@@ -128,62 +130,91 @@ TEST_F(NodeTest, NeverGivesAFrameThatHasAParentASecondOne) {
   EXPECT_GE(poses_.size(), poses_before + 3) << "the estimate still goes out on ~pose";
 }
 
-/// Sends one parameter through dynamic_reconfigure; returns the values the node reports in force.
-
-/// Runs a command through the shell; returns its exit code and what it printed.
-std::pair<int, std::string> runCommand(const std::string& command) {
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  std::string output;
-  char buffer[4096];
-  while (pipe && fgets(buffer, sizeof(buffer), pipe)) output += buffer;
-  const int status = pipe ? pclose(pipe) : -1;
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
-
-// The tracker refuses to start on a TUM camera it does not know, or on two sources of intrinsics,
-// and says which parameter and value; nothing is guessed.
-TEST(TrackerNode, RefusesAnUnknownTumCameraAndTwoSourcesOfIntrinsicsByName) {
+// The tracker refuses to start on a TUM camera it does not know, on two sources of intrinsics or
+// on frames that cannot form a tree, and says which parameter and value; nothing is guessed.
+TEST(TrackerNode, RefusesAnUnknownTumCameraTwoSourcesOfIntrinsicsAndFramesThatCannotFormATreeByName) {
   const std::string node = "timeout 30 rosrun sdf_tracker sdf_tracker_node __name:=tum_camera_check ";
-  auto [code, output] = runCommand(node + "_tum_camera:=freiburg4");
-  EXPECT_EQ(code, 1) << output;
-  EXPECT_NE(output.find("~tum_camera must be one of freiburg1, freiburg2, freiburg3, or empty for camera_info's "
+  st::test::CommandResult run = st::test::runCommand(node + "_tum_camera:=freiburg4");
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("~tum_camera must be one of freiburg1, freiburg2, freiburg3, or empty for camera_info's "
                         "calibration (got \"freiburg4\")"),
             std::string::npos)
-      << output;
-  std::tie(code, output) = runCommand(node + "_tum_camera:=freiburg1 _FocalLengthX:=500.0");
-  EXPECT_EQ(code, 1) << output;
-  EXPECT_NE(output.find("~tum_camera (freiburg1) and FocalLength/CenterPoint both give the intrinsics"),
+      << run.output;
+  run = st::test::runCommand(node + "_map_frame:=''");
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("~map_frame must name a frame (got \"\")"), std::string::npos) << run.output;
+  run = st::test::runCommand(node + "_odom_frame:=map");
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("~map_frame and ~odom_frame are both \"map\": a frame cannot be its own parent"),
             std::string::npos)
-      << output;
+      << run.output;
+  run = st::test::runCommand(node + "_tum_camera:=freiburg1 _FocalLengthX:=500.0");
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("~tum_camera (freiburg1) and FocalLength/CenterPoint both give the intrinsics"),
+            std::string::npos)
+      << run.output;
+}
+
+// A file that could not be written at shut-down is refused at the start, naming the parameter;
+// one that can is written at shut-down (SIGINT, as roslaunch stops a node) and said so on stdout.
+TEST(TrackerNode, OutputFilesAreCheckedAtTheStartAndReportedAtShutDown) {
+  const std::string node = "rosrun sdf_tracker sdf_tracker_node __name:=output_check ";
+  st::test::CommandResult run = st::test::runCommand("timeout 30 " + node + "_trajectory_file:=/nonexistent/folder/trajectory.txt");
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("~trajectory_file \"/nonexistent/folder/trajectory.txt\": the folder /nonexistent/folder "
+                        "does not exist"),
+            std::string::npos)
+      << run.output;
+
+  char folder[] = "/tmp/sdf_tracker_output_check_XXXXXX";
+  ASSERT_NE(mkdtemp(folder), nullptr);
+  const std::string trajectory = std::string(folder) + "/trajectory.txt";
+  run = st::test::runCommand("timeout --preserve-status -s INT 8 " + node + "_trajectory_file:=" + trajectory);
+  EXPECT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("sdf_tracker: wrote the trajectory to " + trajectory), std::string::npos) << run.output;
+  EXPECT_TRUE(std::ifstream(trajectory).good()) << trajectory << " was not written";
 }
 
 // The camera drivers on a machine without a camera, or pointed at a recording that is not there:
 // an error that names what is missing, and a non-zero exit (roslaunch then ends the launch).
 TEST(CameraDrivers, WithoutACameraOrRecordingExitWithAnErrorNamingIt) {
   const std::string driver = "ROS_NAMESPACE=no_camera timeout 30 rosrun sdf_tracker ";
-  auto [code, output] = runCommand(driver + "openni2_depth_publisher");
-  EXPECT_EQ(code, 1) << output;
-  EXPECT_NE(output.find("no OpenNI 2 camera found"), std::string::npos) << output;
+  st::test::CommandResult run = st::test::runCommand(driver + "openni2_depth_publisher");
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("no OpenNI 2 camera found"), std::string::npos) << run.output;
 
-  std::tie(code, output) = runCommand(driver + "openni2_depth_publisher _device_id:=/nonexistent/recording.oni");
-  EXPECT_EQ(code, 1) << output;
-  EXPECT_NE(output.find("cannot open ~device_id \"/nonexistent/recording.oni\""), std::string::npos) << output;
+  run = st::test::runCommand(driver + "openni2_depth_publisher _device_id:=/nonexistent/recording.oni");
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("cannot open ~device_id \"/nonexistent/recording.oni\""), std::string::npos) << run.output;
 
-  std::tie(code, output) = runCommand(driver + "openni2_depth_publisher _depth_mode:=HD");
-  EXPECT_EQ(code, 1) << output;
-  EXPECT_NE(output.find("~depth_mode must be VGA or QVGA (got \"HD\")"), std::string::npos) << output;
+  run = st::test::runCommand(driver + "openni2_depth_publisher _depth_mode:=HD");
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("~depth_mode must be VGA or QVGA (got \"HD\")"), std::string::npos) << run.output;
 
-  std::tie(code, output) = runCommand(driver + "kinect_depth_publisher");
-  EXPECT_EQ(code, 1) << output;
-  EXPECT_TRUE(output.find("no Kinect found") != std::string::npos ||
-              output.find("libfreenect failed to initialise") != std::string::npos)
-      << output;
+  run = st::test::runCommand(driver + "kinect_depth_publisher");
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_TRUE(run.output.find("no Kinect found") != std::string::npos ||
+              run.output.find("libfreenect failed to initialise") != std::string::npos)
+      << run.output;
 
   // Through libfreenect's own replay wrapper, as kinect.launch fakenect:= runs it.
-  std::tie(code, output) = runCommand("ROS_NAMESPACE=no_camera timeout 30 fakenect /nonexistent/dump rosrun sdf_tracker kinect_depth_publisher");
-  EXPECT_EQ(code, 1) << output;
-  EXPECT_NE(output.find("FAKENECT_PATH=/nonexistent/dump: cannot open /nonexistent/dump/INDEX.txt"), std::string::npos)
-      << output;
+  run = st::test::runCommand("ROS_NAMESPACE=no_camera timeout 30 fakenect /nonexistent/dump rosrun sdf_tracker kinect_depth_publisher");
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("FAKENECT_PATH=/nonexistent/dump: cannot open /nonexistent/dump/INDEX.txt"), std::string::npos)
+      << run.output;
+
+  // A recording whose calibration file cannot be read: refused, not replayed with a guess.
+  char dump[] = "/tmp/sdf_tracker_corrupt_calibration_XXXXXX";
+  ASSERT_NE(mkdtemp(dump), nullptr);
+  std::ofstream(std::string(dump) + "/INDEX.txt") << "d-1.000000-0.pgm\n";
+  std::ofstream(std::string(dump) + "/depth_camera_info.yaml") << "image_width: [not, a, number\n";
+  run = st::test::runCommand("ROS_NAMESPACE=no_camera timeout 30 fakenect " + std::string(dump) +
+                                      " rosrun sdf_tracker kinect_depth_publisher");
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("the recording's calibration " + std::string(dump) +
+                        "/depth_camera_info.yaml cannot be read as a camera calibration"),
+            std::string::npos)
+      << run.output;
 }
 
 

@@ -163,7 +163,7 @@ TEST_F(NodeTest, MeshBlocksSendsANewViewerEverythingAndThenOnlyTheChunksThatChan
   EXPECT_GE(chunkMarkers(*joined).first, all_chunks);
 }
 
-
+/// Sends one parameter through dynamic_reconfigure; returns the values the node reports in force.
 std::map<std::string, st::ParameterValue> reconfigure(const std::string& name, const st::ParameterValue& value) {
   dynamic_reconfigure::Reconfigure srv;
   if (const auto* d = std::get_if<double>(&value)) {

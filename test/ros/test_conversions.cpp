@@ -236,6 +236,17 @@ TEST(Frames, GravityLevelsTheMapFrameAndKeepsTheViewingDirectionForward) {
   EXPECT_NEAR(std::atan2(-forward.z(), forward.x()), pitch, 1e-9) << "the camera looks 30 degrees down";
   EXPECT_NEAR(T_map_W.linear().determinant(), 1.0, 1e-12);
   EXPECT_THROW(gravityAlignedMapFromOpticalWorld(Eigen::Vector3d::Zero()), std::invalid_argument);
+  EXPECT_THROW(gravityAlignedMapFromOpticalWorld(Eigen::Vector3d(1e300, 1e300, 0.0)), std::invalid_argument)
+      << "a length that overflows";
+}
+
+TEST(Frames, OnlyReadingsThatGravityDominatesCanLevelTheMapFrame) {
+  EXPECT_TRUE(isGravityReading(Eigen::Vector3d(0.3, -9.7, 1.1)));
+  EXPECT_TRUE(isGravityReading(Eigen::Vector3d(0.0, 0.0, 2.5 * 9.81))) << "a camera swung hard is still usable";
+  EXPECT_FALSE(isGravityReading(Eigen::Vector3d::Zero())) << "a driver's placeholder";
+  EXPECT_FALSE(isGravityReading(Eigen::Vector3d(1e300, 1e300, 0.0)));
+  EXPECT_FALSE(isGravityReading(Eigen::Vector3d(std::nan(""), 9.81, 0.0)));
+  EXPECT_FALSE(isGravityReading(Eigen::Vector3d(0.0, 0.0, std::numeric_limits<double>::infinity())));
 }
 
 TEST(Frames, PosesRoundTripThroughMessages) {

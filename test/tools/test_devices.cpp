@@ -65,10 +65,12 @@ TEST(FakenectDump, IsWrittenAsFakenectRecordReadsItAndOnlyWhenComplete) {
   }
   ASSERT_TRUE(fs::exists(dump + "/INDEX.txt"));
   EXPECT_FALSE(fs::exists(dump + ".partial"));
-  const std::vector<double> times = readFakenectDepthTimes(dump);
-  ASSERT_EQ(times.size(), 2u);
-  EXPECT_NEAR(times[0], 1305031102.175304, 1e-6);
-  EXPECT_NEAR(times[1], 1305031102.211214, 1e-6);
+  const std::vector<FakenectDepthFrame> frames = readFakenectDepthFrames(dump);
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_NEAR(frames[0].time_s, 1305031102.175304, 1e-6);
+  EXPECT_NEAR(frames[1].time_s, 1305031102.211214, 1e-6);
+  EXPECT_EQ(frames[0].problem, "");
+  EXPECT_EQ(frames[1].problem, "");
 
   // fakenect's reader: "<type>-<seconds>-<timestamp>.pgm", a one-line header, raw values.
   std::ifstream index(dump + "/INDEX.txt");
@@ -98,12 +100,32 @@ TEST(FakenectDump, AnIndexWithAStrayLineIsRefusedWithItsLineNumber) {
   const std::string root = test::scratchDirectory("fakenect_index");
   std::ofstream(root + "/INDEX.txt") << "d-1.000000-0.pgm\nnot a file name\n";
   try {
-    readFakenectDepthTimes(root);
+    readFakenectDepthFrames(root);
     FAIL() << "a stray line was accepted";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("line 2"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(readFakenectDepthTimes(root + "/missing"), std::runtime_error);
+  EXPECT_THROW(readFakenectDepthFrames(root + "/missing"), std::runtime_error);
+  fs::remove_all(root);
+}
+
+TEST(FakenectDump, AFrameCutShortOrMissingIsNamedWithWhatItLacks) {
+  const std::string root = test::scratchDirectory("fakenect_cut");
+  const std::string dump = root + "/dump";
+  {
+    FakenectDumpWriter writer(dump);
+    for (int i = 0; i < 3; ++i) writer.addDepth(10.0 + i / 30.0, std::vector<uint16_t>(640 * 480, 1000));
+    writer.finish();
+  }
+  std::vector<FakenectDepthFrame> frames = readFakenectDepthFrames(dump);
+  ASSERT_EQ(frames.size(), 3u);
+  fs::resize_file(frames[1].file, fs::file_size(frames[1].file) / 2);  // a copy that stopped half-way
+  fs::remove(frames[2].file);
+  frames = readFakenectDepthFrames(dump);
+  EXPECT_EQ(frames[0].problem, "");
+  EXPECT_NE(frames[1].problem.find("holds 307208 bytes of the 614417 a 640x480 frame needs"), std::string::npos)
+      << frames[1].problem;
+  EXPECT_EQ(frames[2].problem, "cannot be opened");
   fs::remove_all(root);
 }
 

@@ -16,9 +16,11 @@
 #include "sdf_tracker/cli/report.h"
 #include "sdf_tracker/io/depth_png.h"
 #include "sdf_tracker/io/files.h"
+#include "sdf_tracker/io/sdfmap_file.h"
 #include "sdf_tracker/io/trajectory_file.h"
 #include "sdf_tracker/io/vti_file.h"
 #include "sdf_tracker/sim/synthetic.h"
+#include "run_command.h"
 #include "test_helpers.h"
 
 namespace sdf_tracker::tools {
@@ -26,26 +28,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct ToolRun {
-  int exit_code;
-  std::string output;  ///< stdout and stderr
-};
-
-/// Runs `command` (already quoted for the shell), capturing stdout and stderr.
-ToolRun runCommand(const std::string& arguments) {
-  const std::string command = arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  ToolRun run{-1, ""};
-  char buffer[4096];
-  while (pipe && fgets(buffer, sizeof(buffer), pipe)) run.output += buffer;
-  const int status = pipe ? pclose(pipe) : -1;
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return run;
-}
+using ToolRun = test::CommandResult;
 
 /// Runs the offline runner with `arguments` (already quoted for the shell).
 ToolRun offline(const std::string& arguments) {
-  return runCommand(std::string(SDF_TRACKER_OFFLINE) + " --quiet " + arguments);
+  return test::runCommand(std::string(SDF_TRACKER_OFFLINE) + " --quiet " + arguments);
 }
 
 /// Runs the offline runner on `sequence` with `arguments` and expects it to refuse them: exit
@@ -77,6 +64,15 @@ TEST(CommandLine, WholeNumbersBeyondIntAreRefused) {
   const char* argv[] = {"tool", "--frames", "1e10"};
   const CommandLine args(3, const_cast<char**>(argv), {"frames"}, {});
   EXPECT_THROW(args.getInt("frames", 0), std::invalid_argument);
+}
+
+TEST(Offline, AnImageSizeNoIntHoldsIsRefusedByName) {
+  const ToolRun run = offline("--sequence " + shortSequence(2) + " --output " + test::scratchDirectory("huge") +
+                              " --intrinsics 585,585,320,240,1e20,1e20");
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("--intrinsics: the width W: expected a whole number, got \"585,585,320,240,1e20,1e20\""),
+            std::string::npos)
+      << run.output;
 }
 
 TEST(OutputFolder, ResultsAppearOnlyOnCommitAndReplaceThePreviousRunsWhole) {
@@ -178,7 +174,58 @@ TEST(Offline, ARunInWhichNoFrameCouldBeTrackedFails) {
   }
   const ToolRun run = offline("--sequence " + sequence + " --output " + test::scratchDirectory("none"));
   EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("no frame could be tracked after the first: accuracy not evaluated"), std::string::npos)
+      << run.output;
+  EXPECT_EQ(run.output.find("ATE"), std::string::npos) << "an error of poses never tracked:\n" << run.output;
+}
+
+TEST(Offline, AnUnreadableImageIsABadFrameAndTheRunGoesOn) {
+  const std::string sequence = shortSequence(4);
+  std::ifstream list(sequence + "/depth.txt");
+  std::string line, third;
+  for (int frame = 0; std::getline(list, line);) {
+    if (!line.empty() && line[0] != '#' && frame++ == 2) third = sequence + "/" + line.substr(line.find(' ') + 1);
+  }
+  std::ofstream(third, std::ios::trunc) << "not a PNG";
+  const std::string output = test::scratchDirectory("unreadable");
+  const ToolRun run = offline("--sequence " + sequence + " --output " + output);
+  EXPECT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("frame 2: " + third + ": not a PNG file (no PNG signature and header): skipped"),
+            std::string::npos)
+      << run.output;
+  EXPECT_NE(run.output.find("failed 1\n1 frame could not be read and counted as failed (bad_input), the first: " +
+                            third),
+            std::string::npos)
+      << run.output;
+  EXPECT_EQ(io::readTrajectory(output + "/trajectory.txt").size(), 4u) << "a pose for every frame";
+}
+
+TEST(Offline, ARunInWhichNotEvenTheFirstFrameHoldsDepthFails) {
+  const std::string sequence = shortSequence(3);
+  const DepthImage empty(test::testCamera().width, test::testCamera().height, 0.0f);
+  std::ifstream list(sequence + "/depth.txt");
+  std::string line;
+  while (std::getline(list, line)) {
+    if (!line.empty() && line[0] != '#') io::writeDepthPng(sequence + "/" + line.substr(line.find(' ') + 1), empty, 5000.0);
+  }
+  const ToolRun run = offline("--sequence " + sequence + " --output " + test::scratchDirectory("no_depth"));
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("tracked ok 0, failed 3"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("no frame could be tracked"), std::string::npos) << run.output;
+}
+
+TEST(Offline, ARunInWhichNoFrameFitsTheLoadedMapFails) {
+  // A valid map that holds nothing: every frame, the first too, is tracked in it and fits nowhere.
+  VolumeConfig config;
+  config.type = MapType::kSparse;
+  const std::string map = test::scratchDirectory("empty_map") + "/empty.sdfmap";
+  io::writeSparseMap(map, SparseTsdfMap(config));
+  const ToolRun run = offline("--sequence " + shortSequence(3) + " --output " + test::scratchDirectory("missed") +
+                              " --load-volume " + map);
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("tracked ok 0, failed 3"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("no frame could be tracked in the loaded map: accuracy not evaluated"), std::string::npos)
+      << run.output;
 }
 
 TEST(Offline, ASavedMapIsLoadedByTheNextRunAndACorruptOneIsRefusedByName) {

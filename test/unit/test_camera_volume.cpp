@@ -1,11 +1,18 @@
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cmath>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "sdf_tracker/camera/camera.h"
 #include "sdf_tracker/camera/depth_undistortion.h"
 #include "sdf_tracker/map/tsdf_volume.h"
+#include "sdf_tracker/util/memory.h"
 #include "test_helpers.h"
 
 namespace sdf_tracker {
@@ -264,6 +271,50 @@ TEST(TsdfVolume, CompactTrilinearSamplingMatchesTheFloatGrid) {
   EXPECT_NEAR(a.distance_m, b.distance_m, 1e-5f);
   EXPECT_LT((a.gradient - b.gradient).norm(), 2e-3f);
 }
+
+TEST(Memory, ARequestBeyondWhatIsAvailableIsRefusedSayingHowMuch) {
+  EXPECT_NO_THROW(requireMemory(1 << 20, "a small grid", 2 << 20));
+  try {
+    requireMemory(3ull << 30, "a grid of 1024x1024x384 voxels", 1ull << 30);
+    FAIL() << "3 GiB fitted into 1 GiB";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), "a grid of 1024x1024x384 voxels needs 3072 MiB of memory, but 1024 MiB are available");
+  }
+  EXPECT_GT(availableMemoryBytes(), 0u);
+}
+
+#if !defined(__SANITIZE_ADDRESS__)
+TEST(TsdfVolume, AGridBeyondTheProcesssMemoryLimitIsRefusedByNameNotByBadAlloc) {
+  // In a child under a 1 GiB address-space limit (ulimit -v), a 2 GiB grid.
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    struct rlimit limit;
+    getrlimit(RLIMIT_AS, &limit);
+    limit.rlim_cur = 1ull << 30;
+    if (setrlimit(RLIMIT_AS, &limit) != 0) _exit(3);
+    VolumeConfig config;
+    config.dims = Eigen::Vector3i(640, 640, 640);
+    try {
+      TsdfVolume volume(config);
+      _exit(1);  // allocated: the limit was not seen
+    } catch (const std::runtime_error& e) {
+      const std::string expected = "a dense grid of 640x640x640 voxels needs 2000 MiB of memory, but ";
+      _exit(std::string(e.what()).rfind(expected, 0) == 0 ? 0 : 2);
+    } catch (const std::bad_alloc&) {
+      _exit(4);
+    }
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "1: allocated anyway; 2: another message; 3: no limit set; 4: std::bad_alloc";
+}
+#else
+TEST(TsdfVolume, AGridBeyondTheProcesssMemoryLimitIsRefusedByNameNotByBadAlloc) {
+  GTEST_SKIP() << "AddressSanitizer reserves terabytes of address space: an address-space limit stops it first";
+}
+#endif
 
 TEST(TsdfVolume, SamplingRejectsUnobservedOutsideAndNaN) {
   VolumeConfig config;

@@ -1,14 +1,18 @@
 #include <gtest/gtest.h>
 
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <iterator>
+#include <limits>
 
 #include "sdf_tracker/io/depth_png.h"
 #include "sdf_tracker/io/files.h"
@@ -86,6 +90,16 @@ TEST(Io, PlyMeshWritesAndLoadsBack) {
   std::string first;
   std::getline(obj, first);
   EXPECT_EQ(first[0], '#');
+  // By extension: OBJ, PLY, and nothing under a name that promises another format.
+  io::writeMesh(dir + "/by_name.ply", mesh);
+  EXPECT_EQ(io::readPlyMesh(dir + "/by_name.ply").triangles.size(), mesh.triangles.size());
+  try {
+    io::writeMesh(dir + "/mesh.stl", mesh);
+    ADD_FAILURE() << "a PLY was written as mesh.stl";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), dir + "/mesh.stl: unknown mesh file extension (known: .ply, .obj)");
+  }
+  EXPECT_FALSE(std::ifstream(dir + "/mesh.stl").good());
 }
 
 TEST(Io, CorruptPlyIsRejectedWithTheFileName) {
@@ -221,6 +235,16 @@ TEST(Io, ADenseGridSavedAsASparseMapKeepsEveryObservedVoxel) {
   }
 }
 
+/// The file's bytes with its FNV-1a checksum made right again, as a careful forger would.
+std::string withValidChecksum(std::string bytes) {
+  uint64_t hash = 0xcbf29ce484222325ull;
+  for (size_t i = 0; i + sizeof(uint64_t) < bytes.size(); ++i) {
+    hash = (hash ^ static_cast<unsigned char>(bytes[i])) * 0x100000001b3ull;
+  }
+  bytes.replace(bytes.size() - sizeof(hash), sizeof(hash), reinterpret_cast<const char*>(&hash), sizeof(hash));
+  return bytes;
+}
+
 TEST(Io, CorruptSparseMapsAreRefusedSayingWhatIsWrong) {
   const std::string dir = test::scratchDirectory("sdfmap_bad");
   io::writeSparseMap(dir + "/good.sdfmap", patternedSparseMap());
@@ -241,13 +265,69 @@ TEST(Io, CorruptSparseMapsAreRefusedSayingWhatIsWrong) {
   std::string not_a_number = good;
   const float nan = std::nanf("");
   not_a_number.replace(64 + 12 + 8 * 5, sizeof(float), reinterpret_cast<const char*>(&nan), sizeof(float));
-  EXPECT_TRUE(has(sparseMapError(dir, not_a_number), "voxel 5: invalid distance nan"));
+  EXPECT_TRUE(has(sparseMapError(dir, not_a_number), "voxel 5: distance nan m is not within [-10, 0.08] m"))
+      << sparseMapError(dir, not_a_number);
+  // Values no fusion writes, even with a valid checksum: a weight beyond any MaxWeight, a distance
+  // beyond the band.
+  std::string heavy = good;
+  const float huge = 1e30f;
+  heavy.replace(64 + 12 + 8 * 6 + 4, sizeof(float), reinterpret_cast<const char*>(&huge), sizeof(float));
+  EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(heavy)), "voxel 6: weight 1e+30 is not within [0, 1e+09]"))
+      << sparseMapError(dir, withValidChecksum(heavy));
+  std::string far = good;
+  far.replace(64 + 12 + 8 * 7, sizeof(float), reinterpret_cast<const char*>(&huge), sizeof(float));
+  EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(far)), "voxel 7: distance 1e+30 m is not within [-10, 0.08] m"))
+      << sparseMapError(dir, withValidChecksum(far));
   std::string huge_count = good;
   const uint64_t count = 1ull << 40;
   huge_count.replace(56, sizeof(count), reinterpret_cast<const char*>(&count), sizeof(count));
   EXPECT_TRUE(has(sparseMapError(dir, huge_count), "lists 1099511627776 blocks"));
+  const uint64_t absurd_count = 1ull << 62;  // count x block size wraps in 64 bits
+  huge_count.replace(56, sizeof(absurd_count), reinterpret_cast<const char*>(&absurd_count), sizeof(absurd_count));
+  EXPECT_TRUE(has(sparseMapError(dir, huge_count), "lists 4611686018427387904 blocks (more than 2^64 bytes after"))
+      << sparseMapError(dir, huge_count);
   EXPECT_THROW(io::readMap(dir + "/good.map"), std::runtime_error) << "unknown extension";
   EXPECT_THROW(io::writeMap(dir + "/out.bin", patternedSparseMap()), std::runtime_error) << "unknown extension";
+}
+
+TEST(Io, ASparseMapBeyondTheMapsReachIsRefusedEvenWithAValidChecksum) {
+  const std::string dir = test::scratchDirectory("sdfmap_reach");
+  io::writeSparseMap(dir + "/good.sdfmap", patternedSparseMap());
+  const std::string good = readBytes(dir + "/good.sdfmap");
+  ASSERT_EQ(sparseMapError(dir, withValidChecksum(good)), "") << "the forger's checksum is the writer's";
+  auto has = [](const std::string& message, const std::string& part) {
+    return message.find(part) != std::string::npos;
+  };
+  std::string lowest_index = good;
+  const int32_t int_min = std::numeric_limits<int32_t>::min();
+  lowest_index.replace(64, sizeof(int_min), reinterpret_cast<const char*>(&int_min), sizeof(int_min));
+  EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(lowest_index)), "lies beyond the map's reach"))
+      << sparseMapError(dir, withValidChecksum(lowest_index));
+  std::string far_origin = good;
+  const double far = 1e300;
+  far_origin.replace(32, sizeof(far), reinterpret_cast<const char*>(&far), sizeof(far));
+  EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(far_origin)), "invalid map geometry: origin_W.x"))
+      << sparseMapError(dir, withValidChecksum(far_origin));
+}
+
+TEST(Io, AFifoOrAFolderGivenAsAFileIsRefusedWithoutBlocking) {
+  const std::string dir = test::scratchDirectory("not_a_file");
+  ASSERT_EQ(::mkfifo((dir + "/map.sdfmap").c_str(), 0644), 0);
+  ::mkdir((dir + "/folder.vti").c_str(), 0755);
+  auto error = [](const std::function<void()>& read) {
+    try {
+      read();
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(error([&] { io::readMap(dir + "/map.sdfmap"); }),
+            dir + "/map.sdfmap: is not a regular file (a FIFO or a device?)");
+  EXPECT_EQ(error([&] { io::readMap(dir + "/folder.vti"); }), dir + "/folder.vti: is a folder, not a file");
+  EXPECT_NE(error([&] { io::readPlyMesh(dir + "/map.sdfmap"); }), "");
+  EXPECT_NE(error([&] { io::readDepthPng(dir + "/map.sdfmap", 5000.0); }), "");
+  EXPECT_NE(error([&] { io::readTrajectory(dir + "/map.sdfmap"); }), "");
 }
 
 TEST(Io, TrajectoryRoundTripsAndBadLinesAreNamed) {

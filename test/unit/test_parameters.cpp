@@ -79,6 +79,18 @@ TEST(Parameters, TheDenseGridsSizeAndPlacementGivenForTheSparseMapAreAcceptedAnd
       << "the dense grid reads them";
 }
 
+TEST(Parameters, ASwapDirectoryWithoutAMemoryBoundIsAcceptedAndTheUserToldItHasNoEffect) {
+  Settings settings = preset("default");
+  setParameter(&settings, "SwapDirectory", std::string("/data/swap"));
+  EXPECT_TRUE(settings.validate().empty());
+  const std::vector<std::string> notes = settings.withoutEffect({"SwapDirectory"});
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_EQ(notes[0], "SwapDirectory=/data/swap has no effect without MaxMemoryMB, the bound beyond which blocks go "
+                      "to a swap file there; set MaxMemoryMB too");
+  setParameter(&settings, "MaxMemoryMB", 512.0);
+  EXPECT_TRUE(settings.withoutEffect({"SwapDirectory", "MaxMemoryMB"}).empty());
+}
+
 TEST(Parameters, TypesAreCheckedAndIntegersConvertOnlyWhenExact) {
   Settings settings;
   EXPECT_EQ(errorOf([&] { setParameterFromText(&settings, "CellSize", "abc"); }),

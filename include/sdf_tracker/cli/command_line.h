@@ -32,6 +32,10 @@ class CommandLine {
   std::vector<std::string> positional_names_, positional_;
 };
 
+/// `value` as an int when it is a whole number an int can hold; otherwise throws
+/// std::invalid_argument("<what>: expected a whole number, got <text>"), never an undefined cast.
+int wholeNumber(double value, const std::string& what, const std::string& text);
+
 /// The converters' input: the TUM-layout folder given as the first positional argument, cut to
 /// its first --frames N when that option is given; its distortion hint, if any, on stderr.
 /// Throws when the folder lists no frame.

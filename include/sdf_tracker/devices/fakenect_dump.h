@@ -41,8 +41,17 @@ class FakenectDumpWriter {
   bool finished_ = false;
 };
 
-/// The recording times (seconds) of the depth frames of a recording, in replay order, from its
-/// INDEX.txt. Throws std::runtime_error naming the file and line if it cannot be read.
-std::vector<double> readFakenectDepthTimes(const std::string& folder);
+/// One depth frame of a recording, as its INDEX.txt lists it.
+struct FakenectDepthFrame {
+  double time_s = 0.0;  ///< when it was recorded
+  std::string file;     ///< its path
+  /// Why fakenect would hand on less than a whole frame (a file cut short, a missing file, a
+  /// header that is not "P5 640 480 ..."), or empty when the file holds the whole frame.
+  std::string problem;
+};
+
+/// The depth frames of a recording, in replay order, from its INDEX.txt, each file checked for a
+/// whole frame. Throws std::runtime_error naming the file and line if INDEX.txt cannot be read.
+std::vector<FakenectDepthFrame> readFakenectDepthFrames(const std::string& folder);
 
 }  // namespace sdf_tracker::devices

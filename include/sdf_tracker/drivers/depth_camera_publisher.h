@@ -37,8 +37,9 @@ class DepthCameraPublisher {
   /// Someone listens to one of the depth topics: drivers stream only then, as openni2_camera does.
   bool hasSubscribers() const;
   /// A replayed recording brings its own calibration (devices::calibrationFileFor); used unless
-  /// ~depth_camera_info_url is set. Says which intrinsics are in use.
-  void useRecordingCalibration(const std::string& recording);
+  /// ~depth_camera_info_url is set. Says which intrinsics are in use; false (after saying why)
+  /// when the recording has a calibration file that cannot be read.
+  bool useRecordingCalibration(const std::string& recording);
 
   /// A replayed recording has ended: says so and gives subscribers time to take the last frames
   /// before the driver exits (and, with required="true", ends the launch).

@@ -39,6 +39,11 @@ void writeBinary(std::ostream& out, const T& value) {
   out.write(reinterpret_cast<const char*>(&value), sizeof(T));
 }
 
+/// Throws when `path` exists but is not a regular file (or a link to one): a FIFO, a device or a
+/// folder given as a file would block a reader or feed it forever. A missing file is left to the
+/// reader's own "cannot open".
+void requireRegularFile(const std::string& path);
+
 /// True when `path` ends in `extension` (".sdfmap") and has a name before it.
 bool hasExtension(const std::string& path, const std::string& extension);
 

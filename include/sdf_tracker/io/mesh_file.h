@@ -12,7 +12,8 @@ void writePly(const std::string& path, const SurfaceCloud& cloud);
 void writePly(const std::string& path, const TriangleMesh& mesh);
 /// Wavefront OBJ, as the reference release's triangles.obj.
 void writeObj(const std::string& path, const TriangleMesh& mesh);
-/// A mesh file chosen by its extension: Wavefront OBJ for a .obj path, binary PLY for any other.
+/// A mesh file chosen by its extension: Wavefront OBJ for .obj, binary PLY for .ply; any other
+/// extension is refused, naming the path (a PLY under another name would fool the next program).
 void writeMesh(const std::string& path, const TriangleMesh& mesh);
 /// Reads a PLY written by writePly(mesh) (binary or ASCII vertices x y z and triangle faces).
 TriangleMesh readPlyMesh(const std::string& path);

@@ -130,7 +130,10 @@ class SparseTsdfMap : public TsdfMap {
     return {chunk * kChunkBlocks, chunk * kChunkBlocks + Eigen::Vector3i::Constant(kChunkBlocks - 1)};
   }
   /// Whether a block index lies within the maps' reach (keyOf() does not wrap).
-  static bool inKeyRange(const BlockIndex& block) { return block.cwiseAbs().maxCoeff() <= kMaxBlock; }
+  /// (Compares each index with both bounds: the absolute value of INT_MIN does not exist.)
+  static bool inKeyRange(const BlockIndex& block) {
+    return (block.array() >= -kMaxBlock).all() && (block.array() <= kMaxBlock).all();
+  }
   /// Block edge length [m].
   float blockSize() const { return kBlockSide * voxelSize(); }
 
@@ -241,6 +244,16 @@ TsdfVolume toDenseVolume(const TsdfMap& map);
 /// ParaView. Throws std::invalid_argument naming the region when it holds fewer than two voxels
 /// along an axis, or when the grid would be too large (VolumeConfig::validate).
 TsdfVolume toDenseVolume(const TsdfMap& map, const Eigen::AlignedBox3d& region_W);
+/// Where toDenseVolume(map, region_W) takes its voxels from: the first lattice voxel and the
+/// grid's size. Throws as toDenseVolume does, without allocating anything, so that a region can
+/// be checked before it is needed.
+struct DenseRegion {
+  Eigen::Vector3i first;
+  Eigen::Vector3i dims;
+  /// The grid's memory, with the voxels of `config` (compact or not).
+  uint64_t bytes(const VolumeConfig& config) const;
+};
+DenseRegion denseRegionOf(const TsdfMap& map, const Eigen::AlignedBox3d& region_W);
 /// The map as blocks: a copy of a sparse one; the blocks of a dense one that hold an observed
 /// voxel (on the same lattice, so every observed voxel keeps its value).
 SparseTsdfMap toSparseMap(const TsdfMap& map);

@@ -19,6 +19,17 @@ struct Voxel {
   float weight;
 };
 
+/// The furthest any truncation band reaches from a surface [m], in front of it or behind, and the
+/// largest weight a voxel may hold: the bounds of the parameters that set them, and of what a map
+/// file may hold.
+constexpr double kMaxTruncationDistance_m = 10.0;
+constexpr double kMaxVoxelWeight = 1e9;
+
+/// Why `voxel` cannot be one of a map whose positive truncation is `positive_truncation_m`
+/// ("distance 1e+30 m is not within [-10, 0.1] m"), or "" when it can: a finite distance within
+/// [-kMaxTruncationDistance_m, positive truncation], a finite weight within [0, kMaxVoxelWeight].
+std::string voxelProblem(const Voxel& voxel, double positive_truncation_m);
+
 /// How the map stores its voxels.
 enum class MapType {
   kDense,   ///< one flat grid of fixed extent (the paper's and the reference release's)

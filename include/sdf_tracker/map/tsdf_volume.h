@@ -52,7 +52,8 @@ struct VoxelCodec<CompactVoxel> {
 class TsdfVolume : public TsdfMap {
  public:
   /// Throws std::invalid_argument naming every violation of the config (of any type: a dense
-  /// grid of the config's geometry).
+  /// grid of the config's geometry), and std::runtime_error when the grid needs more memory than
+  /// the process can still allocate (requireMemory), before allocating it.
   explicit TsdfVolume(const VolumeConfig& config);
 
   const Eigen::Vector3i& dims() const { return config_.dims; }

@@ -22,11 +22,14 @@ namespace sdf_tracker_ros {
 class MapServices {
  public:
   /// `T_map_W` gives the map frame's pose in the tracker's world (for boxes given in the map frame).
+  /// Throws std::invalid_argument, naming the parameter and the path, when a file to be written at
+  /// shut-down could not be: its folder is missing or not writable (checked now, not after the run).
   MapServices(ros::NodeHandle pnh, TrackerState& state, const NodeOptions& options,
               std::function<Eigen::Isometry3d()> T_map_W);
 
-  /// Writes every file the options ask for; logs (never throws) what fails.
-  void writeAtShutdown();
+  /// Writes every file the options ask for and says on stdout what it wrote and on stderr what
+  /// failed (rosconsole may be gone at shut-down); never throws. False when a write failed.
+  bool writeAtShutdown();
 
  private:
   bool reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&);

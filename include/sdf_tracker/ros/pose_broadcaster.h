@@ -25,8 +25,16 @@ Eigen::Isometry3d mapFromOpticalWorld();
 
 /// A map frame whose z axis points against gravity: `up_W` is the measured up direction (the
 /// accelerometer's mean reading) in the tracker's world; x stays as close to the first camera's
-/// viewing direction as levelling allows. Throws std::invalid_argument for a zero vector.
+/// viewing direction as levelling allows. Throws std::invalid_argument for a zero vector or one
+/// whose length is not finite.
 Eigen::Isometry3d gravityAlignedMapFromOpticalWorld(const Eigen::Vector3d& up_W);
+
+/// Whether an accelerometer reading [m/s^2] can say where up is: finite, and of a magnitude that
+/// gravity dominates (kMinGravityReading to kMaxGravityReading). A zero, NaN or absurd reading
+/// (a driver's placeholder, a broken sensor) says nothing about gravity.
+constexpr double kMinGravityReading = 2.0;
+constexpr double kMaxGravityReading = 30.0;
+bool isGravityReading(const Eigen::Vector3d& acceleration);
 
 /// Puts the tracker's estimate on the tf tree the user already has (REP 105): publishes
 /// map -> [odom ->] base, where base is ~base_frame (its mounting base -> camera looked up in tf)
@@ -76,6 +84,9 @@ class PoseBroadcaster {
   /// moves, so only the readings just before the first frame say where up was then.
   std::deque<std::pair<ros::Time, Eigen::Vector3d>> accelerations_;
   std::string imu_frame_;
+  /// Readings refused by isGravityReading() before the first frame, and the last one's magnitude.
+  size_t refused_readings_ = 0;
+  double last_refused_magnitude_ = 0.0;
 };
 
 }  // namespace sdf_tracker_ros

@@ -32,7 +32,13 @@ class TrackerServer {
  public:
   /// Throws std::invalid_argument when a parameter is invalid (the node then refuses to start).
   TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh);
+  /// finish(), unless it was called.
   ~TrackerServer();
+
+  /// Stops taking frames, prints the run's summary and writes the files the parameters ask for
+  /// (on stdout and stderr: rosconsole may be gone at shut-down). False when a file could not be
+  /// written. Once only; later calls return the first one's answer.
+  bool finish();
 
  private:
   struct Frame {
@@ -72,6 +78,7 @@ class TrackerServer {
   ros::WallTime last_image_wall_, last_info_wall_;
   sensor_msgs::CameraInfoConstPtr last_info_;  ///< latest camera_info, to compare with parameters
   bool stopping_ = false;
+  std::optional<bool> finished_;  ///< finish()'s answer, once it ran
   ros::Timer watchdog_timer_;
 
   // Used by the frame thread only.
