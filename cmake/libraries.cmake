@@ -50,6 +50,7 @@ set(SDF_TRACKER_UNIT_TEST_SOURCES
   ${SDF_TRACKER_TEST_DIR}/unit/test_integrator.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_tracker.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_io.cpp
+  ${SDF_TRACKER_TEST_DIR}/unit/test_tum_sequence.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_evaluation.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_parameters.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_pipeline.cpp

@@ -3,10 +3,12 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 
 namespace sdf_tracker::io {
 
@@ -42,6 +44,18 @@ void requireRegularFile(const std::string& path) {
   struct stat info;
   if (::stat(path.c_str(), &info) == 0 && !S_ISREG(info.st_mode)) {
     throwFileError(path, S_ISDIR(info.st_mode) ? "is a folder, not a file" : "is not a regular file (a FIFO or a device?)");
+  }
+}
+
+void requireFreeSpace(const std::string& path, uint64_t bytes, const std::string& what) {
+  std::error_code error;
+  std::filesystem::path folder = std::filesystem::absolute(path, error).parent_path();
+  struct statvfs disk;
+  if (error || ::statvfs(folder.c_str(), &disk) != 0) return;  // opening the file then says what is wrong
+  const uint64_t free_bytes = static_cast<uint64_t>(disk.f_bavail) * disk.f_frsize;
+  if (free_bytes < bytes) {
+    throwFileError(path, what + " needs about " + std::to_string(bytes >> 20) + " MiB, but " + folder.string() +
+                             " has " + std::to_string(free_bytes >> 20) + " MiB free");
   }
 }
 

@@ -46,6 +46,9 @@ void writeVti(const std::string& path, const TsdfVolume& volume) {
   const Eigen::Vector3i d = volume.dims();
   const Eigen::Vector3d o = volume.config().origin_W;
   const uint64_t array_bytes = volume.voxelCount() * sizeof(float);
+  // Both before the file is opened: a grid too large for the memory or the disk is refused by name.
+  requireMemory(volume.voxelCount() * sizeof(float), "writing " + path);
+  requireFreeSpace(path, 2 * array_bytes, "the grid's " + std::to_string(volume.voxelCount()) + " voxels");
   AtomicOutput out(path);
   std::ostream& s = out.stream();
   s << std::setprecision(17);
@@ -64,7 +67,6 @@ void writeVti(const std::string& path, const TsdfVolume& volume) {
     << "        <DataArray type=\"Float32\" Name=\"weight\" format=\"appended\" offset=\""
     << array_bytes + sizeof(uint64_t) << "\"/>\n"
     << "      </PointData>\n    </Piece>\n  </ImageData>\n  <AppendedData encoding=\"raw\">\n   _";
-  requireMemory(volume.voxelCount() * sizeof(float), "writing " + path);
   std::vector<float> buffer(volume.voxelCount());
   for (int field = 0; field < 2; ++field) {
     for (size_t i = 0; i < buffer.size(); ++i) {
@@ -119,7 +121,7 @@ TsdfVolume readVti(const std::string& path, bool compact_voxels) {
   if (truncation_at == std::string::npos) throwFileError(path, "missing field positive_truncation_m");
   config.positive_truncation_m =
       parseNumbers<double, 1>(header.substr(header.find('>', truncation_at) + 1), "positive_truncation_m", path)[0];
-  const auto violations = config.validate();  // includes the memory budget of the grid
+  const auto violations = config.validate();
   if (!violations.empty()) throwFileError(path, "invalid volume geometry: " + violations.front());
 
   // The file must hold both arrays before anything is allocated for them: a short file that

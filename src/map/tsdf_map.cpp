@@ -53,13 +53,6 @@ std::vector<std::string> VolumeConfig::validate() const {
   v.requireInRange("dims.x", dims.x(), 2, 4096);
   v.requireInRange("dims.y", dims.y(), 2, 4096);
   v.requireInRange("dims.z", dims.z(), 2, 4096);
-  if (v.list().empty()) {
-    const double voxels = static_cast<double>(dims.x()) * dims.y() * dims.z();
-    std::ostringstream s;
-    s << "dims " << dims.x() << "x" << dims.y() << "x" << dims.z() << " need "
-      << voxels * sizeof(Voxel) / (1 << 30) << " GiB; at most 16 GiB is allowed";
-    v.require(voxels * sizeof(Voxel) <= 16.0 * (1ull << 30), s.str());
-  }
   return v.list();
 }
 

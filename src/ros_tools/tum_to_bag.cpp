@@ -16,12 +16,9 @@
 // camera's calibration (the node's ~tum_camera gives that).
 // The bag is written to a temporary file and renamed when complete: a failure leaves no bag.
 
-#include <sys/statvfs.h>
-
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -38,6 +35,7 @@
 
 #include "sdf_tracker/cli/command_line.h"
 #include "sdf_tracker/devices/recording.h"
+#include "sdf_tracker/io/files.h"
 #include "sdf_tracker/io/tum_sequence.h"
 #include "sdf_tracker/pipeline/parameters.h"
 #include "sdf_tracker/ros/conversions.h"
@@ -142,18 +140,6 @@ uint64_t estimatedBagBytes(const st::TumSequence& sequence, size_t colour_images
   return sequence.size() * pixels * 4 + colour_images * pixels * 3;
 }
 
-/// Throws std::runtime_error when the file system of `path` has less than `bytes` free.
-void requireFreeSpace(const std::string& path, uint64_t bytes) {
-  const std::filesystem::path folder = std::filesystem::absolute(path).parent_path();
-  struct statvfs disk;
-  if (::statvfs(folder.c_str(), &disk) != 0) return;  // the open below then says what is wrong
-  const uint64_t free_bytes = static_cast<uint64_t>(disk.f_bavail) * disk.f_frsize;
-  if (free_bytes < bytes) {
-    throw std::runtime_error(path + ": the bag needs about " + std::to_string(bytes >> 20) + " MiB, but " +
-                             folder.string() + " has " + std::to_string(free_bytes >> 20) + " MiB free");
-  }
-}
-
 int run(int argc, char** argv) {
   const st::tools::CommandLine args(argc, argv, {"frames"}, {"help", "openni-default-intrinsics"},
                                     {"SEQUENCE_DIR", "OUT.bag"});
@@ -180,7 +166,7 @@ int run(int argc, char** argv) {
     return camera;
   };
 
-  requireFreeSpace(out, estimatedBagBytes(sequence, colour.size()));
+  st::io::requireFreeSpace(out, estimatedBagBytes(sequence, colour.size()), "the bag");
   // On a failed write the bag is let go without destroying it: its destructor would write its
   // index to the same full disk and throw again, which ends the process.
   auto bag_owner = std::make_unique<rosbag::Bag>();

@@ -133,22 +133,26 @@ TEST_F(NodeTest, NeverGivesAFrameThatHasAParentASecondOne) {
 // The tracker refuses to start on a TUM camera it does not know, on two sources of intrinsics or
 // on frames that cannot form a tree, and says which parameter and value; nothing is guessed.
 TEST(TrackerNode, RefusesAnUnknownTumCameraTwoSourcesOfIntrinsicsAndFramesThatCannotFormATreeByName) {
-  const std::string node = "timeout 30 rosrun sdf_tracker sdf_tracker_node __name:=tum_camera_check ";
-  st::test::CommandResult run = st::test::runCommand(node + "_tum_camera:=freiburg4");
+  // A private parameter given on the command line stays on the parameter server after the node
+  // exits: each case runs under a name of its own.
+  auto node = [](const std::string& name) {
+    return "timeout 30 rosrun sdf_tracker sdf_tracker_node __name:=" + name + " ";
+  };
+  st::test::CommandResult run = st::test::runCommand(node("unknown_tum_camera") + "_tum_camera:=freiburg4");
   EXPECT_EQ(run.exit_code, 1) << run.output;
   EXPECT_NE(run.output.find("~tum_camera must be one of freiburg1, freiburg2, freiburg3, or empty for camera_info's "
-                        "calibration (got \"freiburg4\")"),
+                            "calibration (got \"freiburg4\")"),
             std::string::npos)
       << run.output;
-  run = st::test::runCommand(node + "_map_frame:=''");
+  run = st::test::runCommand(node("empty_map_frame") + "_map_frame:=''");
   EXPECT_EQ(run.exit_code, 1) << run.output;
   EXPECT_NE(run.output.find("~map_frame must name a frame (got \"\")"), std::string::npos) << run.output;
-  run = st::test::runCommand(node + "_odom_frame:=map");
+  run = st::test::runCommand(node("odom_frame_is_map") + "_odom_frame:=map");
   EXPECT_EQ(run.exit_code, 1) << run.output;
   EXPECT_NE(run.output.find("~map_frame and ~odom_frame are both \"map\": a frame cannot be its own parent"),
             std::string::npos)
       << run.output;
-  run = st::test::runCommand(node + "_tum_camera:=freiburg1 _FocalLengthX:=500.0");
+  run = st::test::runCommand(node("two_intrinsics") + "_tum_camera:=freiburg1 _FocalLengthX:=500.0");
   EXPECT_EQ(run.exit_code, 1) << run.output;
   EXPECT_NE(run.output.find("~tum_camera (freiburg1) and FocalLength/CenterPoint both give the intrinsics"),
             std::string::npos)
@@ -158,18 +162,20 @@ TEST(TrackerNode, RefusesAnUnknownTumCameraTwoSourcesOfIntrinsicsAndFramesThatCa
 // A file that could not be written at shut-down is refused at the start, naming the parameter;
 // one that can is written at shut-down (SIGINT, as roslaunch stops a node) and said so on stdout.
 TEST(TrackerNode, OutputFilesAreCheckedAtTheStartAndReportedAtShutDown) {
-  const std::string node = "rosrun sdf_tracker sdf_tracker_node __name:=output_check ";
-  st::test::CommandResult run = st::test::runCommand("timeout 30 " + node + "_trajectory_file:=/nonexistent/folder/trajectory.txt");
+  const std::string node = "rosrun sdf_tracker sdf_tracker_node ";
+  st::test::CommandResult run = st::test::runCommand(
+      "timeout 30 " + node + "__name:=missing_output_folder _trajectory_file:=/nonexistent/folder/trajectory.txt");
   EXPECT_EQ(run.exit_code, 1) << run.output;
   EXPECT_NE(run.output.find("~trajectory_file \"/nonexistent/folder/trajectory.txt\": the folder /nonexistent/folder "
-                        "does not exist"),
+                            "does not exist"),
             std::string::npos)
       << run.output;
 
   char folder[] = "/tmp/sdf_tracker_output_check_XXXXXX";
   ASSERT_NE(mkdtemp(folder), nullptr);
   const std::string trajectory = std::string(folder) + "/trajectory.txt";
-  run = st::test::runCommand("timeout --preserve-status -s INT 8 " + node + "_trajectory_file:=" + trajectory);
+  run = st::test::runCommand("timeout --preserve-status -s INT 8 " + node +
+                             "__name:=written_at_shut_down _trajectory_file:=" + trajectory);
   EXPECT_EQ(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find("sdf_tracker: wrote the trajectory to " + trajectory), std::string::npos) << run.output;
   EXPECT_TRUE(std::ifstream(trajectory).good()) << trajectory << " was not written";
@@ -209,10 +215,10 @@ TEST(CameraDrivers, WithoutACameraOrRecordingExitWithAnErrorNamingIt) {
   std::ofstream(std::string(dump) + "/INDEX.txt") << "d-1.000000-0.pgm\n";
   std::ofstream(std::string(dump) + "/depth_camera_info.yaml") << "image_width: [not, a, number\n";
   run = st::test::runCommand("ROS_NAMESPACE=no_camera timeout 30 fakenect " + std::string(dump) +
-                                      " rosrun sdf_tracker kinect_depth_publisher");
+                             " rosrun sdf_tracker kinect_depth_publisher");
   EXPECT_EQ(run.exit_code, 1) << run.output;
   EXPECT_NE(run.output.find("the recording's calibration " + std::string(dump) +
-                        "/depth_camera_info.yaml cannot be read as a camera calibration"),
+                            "/depth_camera_info.yaml cannot be read as a camera calibration"),
             std::string::npos)
       << run.output;
 }

@@ -1,6 +1,11 @@
 #pragma once
 
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cstdlib>
+#include <fstream>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -63,6 +68,32 @@ inline std::string scratchDirectory(const std::string& name) {
   std::string pattern = std::string(std::getenv("TMPDIR") ? std::getenv("TMPDIR") : "/tmp") + "/sdf_tracker_" + name + "_XXXXXX";
   if (!mkdtemp(pattern.data())) throw std::runtime_error("cannot create a scratch directory");
   return pattern;
+}
+
+/// Writes `text` to `path` as it is (binary).
+inline void writeFile(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+}
+
+/// Runs `fn` in a child process whose address space is capped at `megabytes` more than now (as
+/// ulimit -v would cap a process): an allocation beyond that fails there. True when fn returned
+/// true. Works under AddressSanitizer too, whose reservations are already made when it forks.
+template <typename Fn>
+bool withinMemory(size_t megabytes, Fn&& fn) {
+  const pid_t child = fork();
+  if (child == 0) {
+    std::ifstream status("/proc/self/statm");
+    size_t pages = 0;
+    status >> pages;
+    const rlim_t limit = static_cast<rlim_t>(pages) * sysconf(_SC_PAGESIZE) + (megabytes << 20);
+    const rlimit cap{limit, limit};
+    setrlimit(RLIMIT_AS, &cap);
+    _exit(fn() ? 0 : 1);
+  }
+  int status = 0;
+  waitpid(child, &status, 0);
+  return WIFEXITED(status) && WEXITSTATUS(status) == 0;
 }
 
 }  // namespace sdf_tracker::test

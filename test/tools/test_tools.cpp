@@ -339,7 +339,7 @@ TEST(Evaluate, ThePerPoseErrorsAreTheOnesTheRmseSummarises) {
   const std::string sequence = shortSequence(12);
   const std::string out = test::scratchDirectory("errors");
   ASSERT_EQ(offline("--sequence " + sequence + " --output " + out).exit_code, 0);
-  const ToolRun run = runCommand(std::string(SDF_TRACKER_EVALUATE) + " --groundtruth " + sequence +
+  const ToolRun run = test::runCommand(std::string(SDF_TRACKER_EVALUATE) + " --groundtruth " + sequence +
                                  "/groundtruth.txt --estimate " + out + "/trajectory.txt --errors " + out + "/e.csv");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   std::ifstream csv(out + "/e.csv");

@@ -430,33 +430,6 @@ TEST_F(FusionFixture, ADenseRegionAndALiveCopyHoldTheSameVoxels) {
   EXPECT_GT(sparse.clearedAt(), synced) << "a reader can tell that its copy is stale";
 }
 
-TEST(HouseWalk, PicturesAndShelvesOnTheWallsGiveTheTrackerAllSixDirectionsWhereABareWallDoesNot) {
-  // At 65 s the camera turns close to a room's wall. Bare, the view holds that plane and little
-  // else, and one direction is left to the motion model; with what a lived-in room has on its
-  // walls, the same view fixes the whole pose.
-  const PinholeCamera camera = test::testCamera();
-  const Eigen::Isometry3d T_W_C = synthetic::cameraPose(synthetic::Motion::kWalk, 65.0, 0.0);
-  synthetic::NoiseModel exact;
-  exact.enabled = false;
-  const PipelineConfig config = preset("default").pipeline;
-  auto trackFromNearby = [&](synthetic::HouseWalls walls) {
-    const DepthImage depth = synthetic::Scene::house(walls).render(camera, T_W_C, exact, 0);
-    SparseTsdfMap map(config.volume);
-    Integrator(config.integrator).integrate(depth, camera, T_W_C, &map);
-    return Tracker(config.tracker).track(depth, camera, map, test::perturbed(T_W_C, 0.01, 0.01));
-  };
-  const TrackResult bare = trackFromNearby(synthetic::HouseWalls::kBare);
-  EXPECT_EQ(bare.status, TrackStatus::kDegenerate) << bare.message;
-  EXPECT_LT(bare.constrained_rank, 6) << bare.message;
-  const TrackResult furnished = trackFromNearby(synthetic::HouseWalls::kFurnished);
-  ASSERT_EQ(furnished.status, TrackStatus::kOk) << furnished.message;
-  EXPECT_EQ(furnished.constrained_rank, 6);
-  EXPECT_LT((furnished.T_W_C.translation() - T_W_C.translation()).norm(), 0.005) << "from a guess 1 cm off";
-  std::cout << "inverse condition at 65 s: bare walls " << bare.inverse_condition << " (rank "
-            << bare.constrained_rank << "), furnished " << furnished.inverse_condition << " (rank "
-            << furnished.constrained_rank << ")\n";
-}
-
 TEST(BlockSwap, GivesBlocksBackExactlyAndReusesTheRecordsOfThoseTaken) {
   BlockSwapFile swap(test::scratchDirectory("swap"));
   auto blockOf = [](float seed) {

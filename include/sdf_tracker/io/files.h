@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <fstream>
 #include <ostream>
 #include <string>
@@ -43,6 +44,11 @@ void writeBinary(std::ostream& out, const T& value) {
 /// folder given as a file would block a reader or feed it forever. A missing file is left to the
 /// reader's own "cannot open".
 void requireRegularFile(const std::string& path);
+
+/// Throws when the file system `path` would be written to has less than `bytes` free: "<path>:
+/// <what> needs about N MiB, but <folder> has M MiB free". Asked before a large write, so that a
+/// full disk is named at the start rather than found half-way.
+void requireFreeSpace(const std::string& path, uint64_t bytes, const std::string& what);
 
 /// True when `path` ends in `extension` (".sdfmap") and has a name before it.
 bool hasExtension(const std::string& path, const std::string& extension);
