@@ -24,7 +24,7 @@ constexpr double kMinProcessedFraction = 0.85;
 /// The issue allows 5 mm between the node and the offline runner on a synthetic sequence.
 constexpr double kMaxAteDifference_m = 0.005;
 /// The replay has ended when no pose has come for this long.
-constexpr double kQuietAfterReplay_s = 5.0;
+constexpr double kQuietAfterReplay_s = 3.0;
 
 TEST(CameraReplay, TracksTheRecordingAsTheOfflineRunnerDoes) {
   ros::NodeHandle pnh("~");

@@ -102,17 +102,5 @@ TEST(TumSequence, LensDistortionIsWhatTheDataStatesNeverInferredFromTheIntrinsic
   }
 }
 
-/// A PNG signature and IHDR chunk with the given size and format, and nothing after it.
-std::string pngHeader(uint32_t width, uint32_t height, uint8_t bit_depth, uint8_t colour_type) {
-  std::string bytes("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR", 16);
-  for (uint32_t value : {width, height}) {
-    for (int shift = 24; shift >= 0; shift -= 8) bytes += static_cast<char>((value >> shift) & 0xff);
-  }
-  bytes += static_cast<char>(bit_depth);
-  bytes += static_cast<char>(colour_type);
-  bytes += std::string("\0\0\0\0\0\0\0", 7);  // compression, filter, interlace, CRC
-  return bytes;
-}
-
 }  // namespace
 }  // namespace sdf_tracker
