@@ -9,43 +9,6 @@
 namespace node_test {
 namespace {
 
-TEST_F(NodeTest, SaveMeshWritesAPlyThatLoadsBack) {
-  ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
-  // Three frames of its own after a reset, whatever ran before.
-  for (int i = 0; i < 3; ++i) publishDeskFrame(100.0 + i, 0.0);
-  sdf_tracker::SavePath save;
-  save.request.path = "/tmp/sdf_tracker_node_test_mesh.ply";
-  ASSERT_TRUE(ros::service::call("sdf_tracker/save_mesh", save));
-  EXPECT_TRUE(save.response.success) << save.response.message;
-  const st::TriangleMesh mesh = st::io::readPlyMesh(save.request.path);
-  EXPECT_GT(mesh.triangles.size(), 1000u);
-}
-
-TEST_F(NodeTest, AMapSavedBySaveVolumeIsTrackedInAfterLoadVolume) {
-  ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
-  for (int i = 0; i < 3; ++i) publishDeskFrame(500.0 + i / 30.0, i / 30.0);
-  sdf_tracker::SavePath save;
-  save.request.path = "/tmp/sdf_tracker_node_test_map.sdfmap";
-  ASSERT_TRUE(ros::service::call("sdf_tracker/save_volume", save));
-  ASSERT_TRUE(save.response.success) << save.response.message;
-  EXPECT_GT(st::io::readSparseMap(save.request.path).blockCount(), 100u) << "the dense grid is saved as its blocks";
-
-  ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
-  sdf_tracker::SavePath load;
-  load.request.path = save.request.path;
-  ASSERT_TRUE(ros::service::call("sdf_tracker/load_volume", load));
-  ASSERT_TRUE(load.response.success) << load.response.message;
-  const auto in_loaded = publishDeskFrame(510.0, 1 / 30.0);
-  EXPECT_EQ(in_loaded.status, sdf_tracker::TrackingStatus::OK) << in_loaded.status_text;
-  EXPECT_EQ(in_loaded.status_text.find("first frame"), std::string::npos)
-      << "the frame is tracked in the loaded map, not used to start a new one: " << in_loaded.status_text;
-
-  load.request.path = "/tmp/sdf_tracker_node_test_missing.sdfmap";
-  ASSERT_TRUE(ros::service::call("sdf_tracker/load_volume", load));
-  EXPECT_FALSE(load.response.success);
-  EXPECT_NE(load.response.message.find(load.request.path), std::string::npos) << load.response.message;
-}
-
 /// ros::service::call through a connection of its own, tried again when the connection itself
 /// failed: ROS 1 opens one per call, and one of the CI runs of this test saw such a call fail
 /// with the node up and answering every other. Whether the node did what was asked is in the
@@ -59,8 +22,45 @@ bool callService(const std::string& name, Service& service) {
   return false;
 }
 
+TEST_F(NodeTest, SaveMeshWritesAPlyThatLoadsBack) {
+  ASSERT_TRUE(callService("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
+  // Three frames of its own after a reset, whatever ran before.
+  for (int i = 0; i < 3; ++i) publishDeskFrame(100.0 + i, 0.0);
+  sdf_tracker::SavePath save;
+  save.request.path = "/tmp/sdf_tracker_node_test_mesh.ply";
+  ASSERT_TRUE(callService("sdf_tracker/save_mesh", save));
+  EXPECT_TRUE(save.response.success) << save.response.message;
+  const st::TriangleMesh mesh = st::io::readPlyMesh(save.request.path);
+  EXPECT_GT(mesh.triangles.size(), 1000u);
+}
+
+TEST_F(NodeTest, AMapSavedBySaveVolumeIsTrackedInAfterLoadVolume) {
+  ASSERT_TRUE(callService("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
+  for (int i = 0; i < 3; ++i) publishDeskFrame(500.0 + i / 30.0, i / 30.0);
+  sdf_tracker::SavePath save;
+  save.request.path = "/tmp/sdf_tracker_node_test_map.sdfmap";
+  ASSERT_TRUE(callService("sdf_tracker/save_volume", save));
+  ASSERT_TRUE(save.response.success) << save.response.message;
+  EXPECT_GT(st::io::readSparseMap(save.request.path).blockCount(), 100u) << "the dense grid is saved as its blocks";
+
+  ASSERT_TRUE(callService("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
+  sdf_tracker::SavePath load;
+  load.request.path = save.request.path;
+  ASSERT_TRUE(callService("sdf_tracker/load_volume", load));
+  ASSERT_TRUE(load.response.success) << load.response.message;
+  const auto in_loaded = publishDeskFrame(510.0, 1 / 30.0);
+  EXPECT_EQ(in_loaded.status, sdf_tracker::TrackingStatus::OK) << in_loaded.status_text;
+  EXPECT_EQ(in_loaded.status_text.find("first frame"), std::string::npos)
+      << "the frame is tracked in the loaded map, not used to start a new one: " << in_loaded.status_text;
+
+  load.request.path = "/tmp/sdf_tracker_node_test_missing.sdfmap";
+  ASSERT_TRUE(callService("sdf_tracker/load_volume", load));
+  EXPECT_FALSE(load.response.success);
+  EXPECT_NE(load.response.message.find(load.request.path), std::string::npos) << load.response.message;
+}
+
 TEST_F(NodeTest, SaveVolumeRegionWritesTheBoxGivenInTheMapFrame) {
-  ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
+  ASSERT_TRUE(callService("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
   for (int i = 0; i < 3; ++i) publishDeskFrame(600.0 + i / 30.0, i / 30.0);
   // In the map frame (REP 103: x forward, y left, z up from the first camera): 0.6 to 1.4 m ahead,
   // 0.3 m either side, 0.2 m below to 0.4 m above the camera.
@@ -128,7 +128,7 @@ std::pair<size_t, bool> chunkMarkers(const visualization_msgs::MarkerArray& arra
 }
 
 TEST_F(NodeTest, MeshBlocksSendsANewViewerEverythingAndThenOnlyTheChunksThatChanged) {
-  ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
+  ASSERT_TRUE(callService("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
   for (int i = 0; i < 3; ++i) publishDeskFrame(700.0 + i / 30.0, i / 30.0);
   MeshBlocksListener viewer(nh_);
   ASSERT_TRUE(viewer.next()) << "nothing on ~mesh_blocks";
@@ -137,8 +137,8 @@ TEST_F(NodeTest, MeshBlocksSendsANewViewerEverythingAndThenOnlyTheChunksThatChan
   // viewer is told to start over and gets every chunk.
   sdf_tracker::SavePath path;
   path.request.path = "/tmp/sdf_tracker_node_test_chunks.sdfmap";
-  ASSERT_TRUE(ros::service::call("sdf_tracker/save_volume", path));
-  ASSERT_TRUE(ros::service::call("sdf_tracker/load_volume", path));
+  ASSERT_TRUE(callService("sdf_tracker/save_volume", path));
+  ASSERT_TRUE(callService("sdf_tracker/load_volume", path));
   ASSERT_TRUE(path.response.success) << path.response.message;
   std::optional<visualization_msgs::MarkerArray> all;
   for (int tries = 0; tries < 3 && !(all && chunkMarkers(*all).second); ++tries) all = viewer.next();
@@ -197,7 +197,7 @@ std::map<std::string, st::ParameterValue> reconfigure(const std::string& name, c
     srv.request.config.strs.push_back(p);
   }
   std::map<std::string, st::ParameterValue> in_force;
-  if (!ros::service::call("sdf_tracker/set_parameters", srv)) {
+  if (!callService("sdf_tracker/set_parameters", srv)) {
     ADD_FAILURE() << "set_parameters failed";
     return in_force;
   }
