@@ -24,9 +24,7 @@ std::string PngHeader::describe() const {
 }
 
 PngHeader readPngHeader(const std::string& path) {
-  requireRegularFile(path);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throwFileError(path, std::string("cannot open: ") + std::strerror(errno));
+  std::ifstream in = openForReading(path);
   unsigned char bytes[26];
   in.read(reinterpret_cast<char*>(bytes), sizeof(bytes));
   static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};

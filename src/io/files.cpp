@@ -40,11 +40,19 @@ void AtomicOutput::commit() {
   committed_ = true;
 }
 
-void requireRegularFile(const std::string& path) {
+std::ifstream openForReading(const std::string& path, uint64_t* size_bytes) {
   struct stat info;
   if (::stat(path.c_str(), &info) == 0 && !S_ISREG(info.st_mode)) {
     throwFileError(path, S_ISDIR(info.st_mode) ? "is a folder, not a file" : "is not a regular file (a FIFO or a device?)");
   }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throwFileError(path, std::string("cannot open: ") + std::strerror(errno));
+  if (size_bytes) {
+    in.seekg(0, std::ios::end);
+    *size_bytes = static_cast<uint64_t>(in.tellg());
+    in.seekg(0);
+  }
+  return in;
 }
 
 void requireFreeSpace(const std::string& path, uint64_t bytes, const std::string& what) {

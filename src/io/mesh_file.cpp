@@ -77,9 +77,7 @@ void writeMesh(const std::string& path, const TriangleMesh& mesh) {
 }
 
 TriangleMesh readPlyMesh(const std::string& path) {
-  requireRegularFile(path);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throwFileError(path, std::string("cannot open: ") + std::strerror(errno));
+  std::ifstream in = openForReading(path);
   std::string line;
   if (!std::getline(in, line) || line != "ply") throwFileError(path, "not a PLY file (first line is not \"ply\")");
   bool binary = false;

@@ -83,12 +83,8 @@ void writeSparseMap(const std::string& path, const SparseTsdfMap& map) {
 }
 
 SparseTsdfMap readSparseMap(const std::string& path) {
-  requireRegularFile(path);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throwFileError(path, std::string("cannot open: ") + std::strerror(errno));
-  in.seekg(0, std::ios::end);
-  const uint64_t file_bytes = static_cast<uint64_t>(in.tellg());
-  in.seekg(0);
+  uint64_t file_bytes = 0;
+  std::ifstream in = openForReading(path, &file_bytes);
   MapFileHeader header;
   if (file_bytes < sizeof(header) || !in.read(reinterpret_cast<char*>(&header), sizeof(header)) ||
       std::memcmp(header.magic, kMapMagic, sizeof(kMapMagic)) != 0) {

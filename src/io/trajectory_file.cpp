@@ -24,9 +24,7 @@ void writeTrajectory(const std::string& path, const std::vector<StampedPose>& po
 }
 
 std::vector<StampedPose> readTrajectory(const std::string& path) {
-  requireRegularFile(path);
-  std::ifstream in(path);
-  if (!in) throwFileError(path, std::string("cannot open: ") + std::strerror(errno));
+  std::ifstream in = openForReading(path);
   std::vector<StampedPose> poses;
   std::string line;
   int line_number = 0;

@@ -47,7 +47,7 @@ void writeVti(const std::string& path, const TsdfVolume& volume) {
   const Eigen::Vector3d o = volume.config().origin_W;
   const uint64_t array_bytes = volume.voxelCount() * sizeof(float);
   // Both before the file is opened: a grid too large for the memory or the disk is refused by name.
-  requireMemory(volume.voxelCount() * sizeof(float), "writing " + path);
+  requireMemory(array_bytes, "writing " + path);
   requireFreeSpace(path, 2 * array_bytes, "the grid's " + std::to_string(volume.voxelCount()) + " voxels");
   AtomicOutput out(path);
   std::ostream& s = out.stream();
@@ -81,12 +81,8 @@ void writeVti(const std::string& path, const TsdfVolume& volume) {
 }
 
 TsdfVolume readVti(const std::string& path, bool compact_voxels) {
-  requireRegularFile(path);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throwFileError(path, std::string("cannot open: ") + std::strerror(errno));
-  in.seekg(0, std::ios::end);
-  const uint64_t file_bytes = static_cast<uint64_t>(in.tellg());
-  in.seekg(0);
+  uint64_t file_bytes = 0;
+  std::ifstream in = openForReading(path, &file_bytes);
   // The XML header ends where the raw data starts; it is small (our writer's is under 1 KiB).
   constexpr size_t kMaxHeaderBytes = 64 * 1024;
   std::string text(static_cast<size_t>(std::min<uint64_t>(file_bytes, kMaxHeaderBytes)), '\0');

@@ -21,13 +21,16 @@ const char* toString(MapType type) {
 
 std::string voxelProblem(const Voxel& voxel, double positive_truncation_m) {
   // The truncation is stored in double and clamped to in float (compact voxels round to its
-  // 1/32767th): allow for the rounding.
+  // 1/32767th): allow for the rounding. Called for every voxel a file holds: words only on failure.
   const double highest_m = positive_truncation_m * (1.0 + 1e-4);
+  const bool distance_ok = voxel.distance_m >= -kMaxTruncationDistance_m && voxel.distance_m <= highest_m;
+  const bool weight_ok = voxel.weight >= 0.0f && voxel.weight <= kMaxVoxelWeight;
+  if (distance_ok && weight_ok) return "";
   std::ostringstream s;
-  if (!(voxel.distance_m >= -kMaxTruncationDistance_m && voxel.distance_m <= highest_m)) {
+  if (!distance_ok) {
     s << "distance " << voxel.distance_m << " m is not within [" << -kMaxTruncationDistance_m << ", "
       << positive_truncation_m << "] m";
-  } else if (!(voxel.weight >= 0.0f && voxel.weight <= kMaxVoxelWeight)) {
+  } else {
     s << "weight " << voxel.weight << " is not within [0, " << kMaxVoxelWeight << "]";
   }
   return s.str();

@@ -40,10 +40,10 @@ void writeBinary(std::ostream& out, const T& value) {
   out.write(reinterpret_cast<const char*>(&value), sizeof(T));
 }
 
-/// Throws when `path` exists but is not a regular file (or a link to one): a FIFO, a device or a
-/// folder given as a file would block a reader or feed it forever. A missing file is left to the
-/// reader's own "cannot open".
-void requireRegularFile(const std::string& path);
+/// Opens `path` for reading (binary), and in `size_bytes`, when given, its length. Throws naming
+/// the file when it cannot be opened, and when it is not a regular file (or a link to one): a
+/// FIFO, a device or a folder given as a file would block a reader or feed it forever.
+std::ifstream openForReading(const std::string& path, uint64_t* size_bytes = nullptr);
 
 /// Throws when the file system `path` would be written to has less than `bytes` free: "<path>:
 /// <what> needs about N MiB, but <folder> has M MiB free". Asked before a large write, so that a
