@@ -1,8 +1,7 @@
 #!/usr/bin/env bash
 # The core's unit tests (test_core: test/unit/) and the tools' tests (test_tools: test/tools/),
-# built and run here only, under AddressSanitizer + UndefinedBehaviorSanitizer; then every
-# reader's fuzz target for FUZZ_SECONDS (default 30, two targets at a time) from its committed
-# corpus (test/fuzz/corpus/). Whole sequences (test/sequences/) and the ROS tests run in the
+# built and run here only, under AddressSanitizer + UndefinedBehaviorSanitizer, and every
+# reader's fuzz target for FUZZ_SECONDS (default 30) from its committed corpus (test/fuzz/corpus/). Whole sequences (test/sequences/) and the ROS tests run in the
 # release build (scripts/run_tests.sh). Builds in build/sanitize (plain CMake, no ROS). Results go
 # to RESULTS_DIR (default build/sanitize/results) as JUnit XML, which run_tests.sh counts.
 #   scripts/run_sanitizers.sh
@@ -32,17 +31,16 @@ if ! { cmake -S "$repo/test/sanitize" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebI
   exit 1
 fi
 status=0
-for test in test_core test_tools; do
-  echo "sanitizers: $test under ASan + UBSan"
-  if ! "$build/$test" --gtest_output="xml:$results/$test.xml" > "$build/$test.log" 2>&1; then
-    grep -E "ERROR: (Address|Leak)Sanitizer|runtime error|FAILED" "$build/$test.log" | head -n 20
+run_test() {  # run_test NAME: runs test_NAME, reports what a failure or a sanitizer printed
+  echo "sanitizers: $1 under ASan + UBSan"
+  if ! "$build/$1" --gtest_output="xml:$results/$1.xml" > "$build/$1.log" 2>&1; then
+    grep -E "ERROR: (Address|Leak)Sanitizer|runtime error|FAILED" "$build/$1.log" | head -n 20
     # A sanitizer abort leaves no XML: count it.
-    grep -q "<testsuites" "$results/$test.xml" 2>/dev/null || junit "$test" 0 "aborted: see build/sanitize/$test.log"
-    status=1
+    grep -q "<testsuites" "$results/$1.xml" 2>/dev/null || junit "$1" 0 "aborted: see build/sanitize/$1.log"
+    return 1
   fi
-done
-# Two fuzz targets at a time, one per core, each for the full FUZZ_SECONDS.
-fuzz() {  # fuzz TARGET: runs it and leaves its JUnit result
+}
+fuzz() {  # fuzz TARGET: runs it for the full FUZZ_SECONDS and leaves its JUnit result
   if "$build/fuzz_$1" "$repo/test/fuzz/corpus/$1" "$seconds" 1 > "$build/fuzz_$1.log" 2>&1; then
     echo "sanitizers: fuzzed $1 for $seconds s: $(tail -n 1 "$build/fuzz_$1.log")"
     junit "fuzz_$1" 1 ""
@@ -53,13 +51,18 @@ fuzz() {  # fuzz TARGET: runs it and leaves its JUnit result
     return 1
   fi
 }
-targets=(depth_png vti sdfmap ply tum_folder)
-for ((i = 0; i < ${#targets[@]}; i += 2)); do
-  pids=()
-  for target in "${targets[@]:i:2}"; do
-    fuzz "$target" &
-    pids+=($!)
-  done
-  for pid in "${pids[@]}"; do wait "$pid" || status=1; done
+# The unit tests use both cores (OpenMP). Then the tools' tests and the fuzz targets share them,
+# one job per core, the next starting as soon as one ends.
+run_test test_core || status=1
+jobs_left=("run_test test_tools" "fuzz depth_png" "fuzz vti" "fuzz sdfmap" "fuzz ply" "fuzz tum_folder")
+running=0
+for job in "${jobs_left[@]}"; do
+  if ((running == $(nproc))); then
+    wait -n || status=1
+    running=$((running - 1))
+  fi
+  $job &
+  running=$((running + 1))
 done
+for ((; running > 0; running--)); do wait -n || status=1; done
 exit $status

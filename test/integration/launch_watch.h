@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <iostream>
 #include <map>
 #include <mutex>
@@ -15,6 +16,8 @@
 #include <ros/ros.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include "sdf_tracker/TrackingStatus.h"
+
 #include "sdf_tracker/devices/recording.h"
 #include "sdf_tracker/eval/evaluation.h"
 #include "sdf_tracker/io/tum_sequence.h"
@@ -25,13 +28,15 @@
 
 namespace sdf_tracker::test {
 
-/// Subscribes to /tf, /tf_static and sdf_tracker/pose for its lifetime. Lock `mutex` to read.
+/// Subscribes to /tf, /tf_static, sdf_tracker/pose and sdf_tracker/status for its lifetime. Lock
+/// `mutex` to read.
 class LaunchWatch {
  public:
   explicit LaunchWatch(ros::NodeHandle& nh)
       : tf_sub_(nh.subscribe("/tf", 1000, &LaunchWatch::onTf, this)),
         static_sub_(nh.subscribe("/tf_static", 100, &LaunchWatch::onTf, this)),
-        pose_sub_(nh.subscribe("sdf_tracker/pose", 1000, &LaunchWatch::onPose, this)) {}
+        pose_sub_(nh.subscribe("sdf_tracker/pose", 1000, &LaunchWatch::onPose, this)),
+        status_sub_(nh.subscribe("sdf_tracker/status", 1000, &LaunchWatch::onStatus, this)) {}
 
   /// Every frame seen on /tf or /tf_static has exactly one parent (call with `mutex` held).
   void expectOneParentPerFrame() const {
@@ -46,6 +51,9 @@ class LaunchWatch {
   std::map<std::string, std::set<std::string>> parents;  ///< child frame -> its parents, slashes stripped
   std::vector<io::StampedPose> poses;                     ///< the tracker's estimates, as stamped
   ros::WallTime last_pose_wall;
+  /// The node's counts, as its latest status message gives them.
+  uint32_t frames_received = 0;
+  uint32_t frames_dropped = 0;
 
  private:
   void onTf(const tf2_msgs::TFMessage& msg) {
@@ -60,7 +68,13 @@ class LaunchWatch {
     last_pose_wall = ros::WallTime::now();
   }
 
-  ros::Subscriber tf_sub_, static_sub_, pose_sub_;
+  void onStatus(const sdf_tracker::TrackingStatus& msg) {
+    std::lock_guard<std::mutex> lock(mutex);
+    frames_received = std::max(frames_received, msg.frames_received);
+    frames_dropped = std::max(frames_dropped, msg.frames_dropped);
+  }
+
+  ros::Subscriber tf_sub_, static_sub_, pose_sub_, status_sub_;
 };
 
 /// The node's poses against the offline pipeline's (default preset) on the same sequence: prints

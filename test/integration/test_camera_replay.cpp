@@ -1,11 +1,13 @@
 // Watches kinect.launch or openni2.launch replay a recording of a synthetic sequence through the
 // camera library's own playback (libfreenect's fakenect, OpenNI 2's OniFile): the frames carry
-// the sequence's stamps, at least 85 % of them get a pose, the estimate is as accurate as the
-// offline pipeline's on the same frames, and no frame of /tf has two parents.
+// the sequence's stamps, every frame reaches the node, which tracks it or counts it as dropped,
+// the estimate is as accurate as the offline pipeline's on the same frames, and no frame of /tf
+// has two parents.
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 
 #include <ros/ros.h>
 
@@ -15,12 +17,16 @@ namespace st = sdf_tracker;
 
 namespace {
 
+/// The camera path (the driver, the library's playback, the transport) delivers every frame to
+/// the node: all but a frame or two of the recording reach it.
+constexpr double kMinReceivedFraction = 0.97;
 /// Replayed at the recorded 30 Hz, a frame that arrives while the tracker is busy with the last is
-/// dropped. The synthetic VGA scene has depth at nearly every pixel, where a real recording has
-/// holes: here it costs the tracker 33-35 ms a frame in the node, at the edge of 30 Hz, and 6-9 %
-/// of its frames are dropped (real 300-frame VGA recordings of fr1_xyz and redkitchen: none,
-/// through either driver). Below this share the camera path itself loses frames.
-constexpr double kMinProcessedFraction = 0.85;
+/// dropped (and counted). The synthetic VGA scene has depth at nearly every pixel, where a real
+/// recording has holes: here it costs the tracker 33-35 ms a frame in the node, at the edge of
+/// 30 Hz, and 6-9 % of its frames are dropped on an idle machine, up to a third when something
+/// else wakes up beside it (real 300-frame VGA recordings of fr1_xyz and redkitchen: none,
+/// through either driver). Below this share the tracker has stopped keeping up at all.
+constexpr double kMinProcessedFraction = 0.5;
 /// The issue allows 5 mm between the node and the offline runner on a synthetic sequence.
 constexpr double kMaxAteDifference_m = 0.005;
 /// The replay has ended when no pose has come for this long.
@@ -68,6 +74,13 @@ TEST(CameraReplay, TracksTheRecordingAsTheOfflineRunnerDoes) {
   }
   EXPECT_EQ(stamps_matched, watch.poses.size()) << "every pose carries the stamp of one of the sequence's frames";
 
+  // Every frame that reached the node was tracked or counted as dropped.
+  EXPECT_GE(watch.frames_received, kMinReceivedFraction * sequence.size())
+      << "of " << sequence.size() << " recorded frames, " << watch.frames_received << " reached the node";
+  EXPECT_GE(watch.poses.size() + watch.frames_dropped + 1, watch.frames_received)
+      << watch.poses.size() << " poses and " << watch.frames_dropped << " frames dropped";
+  std::cout << "[ figures  ] " << camera << " replay: " << watch.frames_received << " frames reached the node, "
+            << watch.frames_dropped << " dropped while it was busy\n";
   st::test::expectOfflineAccuracy(sequence, watch.poses, camera + " replay at the recording's rate",
                                   kMinProcessedFraction, kMaxAteDifference_m);
 }

@@ -182,6 +182,16 @@ TEST(SparseMap, ARegionsSamplerAgreesWithTheMapInsideAndOutsideItsRegion) {
   EXPECT_EQ(a.distance_m, b.distance_m);
 }
 
+/// The room's grid at 2 cm: the storages are compared voxel by voxel, which needs no fine lattice
+/// (and an eighth of the voxels keeps these tests quick under the sanitizers).
+VolumeConfig coarseRoom(MapType type) {
+  VolumeConfig config = test::roomVolume();
+  config.voxel_size_m *= 2.0;
+  config.dims /= 2;
+  config.type = type;
+  return config;
+}
+
 /// Frames of the synthetic room along the desk path, fused into a dense grid and a sparse map on
 /// the same lattice.
 struct FusionFixture : public ::testing::Test {
@@ -209,8 +219,8 @@ struct FusionFixture : public ::testing::Test {
   }
   PinholeCamera camera = test::testCamera();
   std::vector<Eigen::Isometry3d> poses;
-  TsdfVolume dense{test::roomVolume()};
-  SparseTsdfMap sparse{sparseRoom()};
+  TsdfVolume dense{coarseRoom(MapType::kDense)};
+  SparseTsdfMap sparse{coarseRoom(MapType::kSparse)};
 };
 
 TEST_F(FusionFixture, FusedVoxelsEqualTheDenseGridsAndCoverItsTruncationBand) {
@@ -237,7 +247,7 @@ TEST_F(FusionFixture, FusedVoxelsEqualTheDenseGridsAndCoverItsTruncationBand) {
           }
         }
       }
-  EXPECT_GT(band, 100000u);
+  EXPECT_GT(band, 20000u);
   // Only depth edges narrower than the allocation's ray spacing may miss a block in some frame.
   EXPECT_GE(static_cast<double>(covered), 0.999 * band) << covered << " of " << band << " voxels in the band";
   EXPECT_GE(static_cast<double>(same_history), 0.995 * band) << same_history << " of " << band;
@@ -256,7 +266,7 @@ TEST_F(FusionFixture, SurfacesMatchTheDenseGrids) {
     return static_cast<double>(std::count_if(points.begin(), points.end(), [&](const auto& p) { return grid.contains(p); }));
   };
   const double points_dense = countInside(a.points_W), points_sparse = countInside(b.points_W);
-  ASSERT_GT(points_dense, 10000);
+  ASSERT_GT(points_dense, 5000);
   EXPECT_NEAR(points_sparse, points_dense, 0.002 * points_dense);
   const TriangleMesh mesh_a = extractMesh(dense), mesh_b = extractMesh(sparse);
   auto trianglesInside = [&grid](const TriangleMesh& mesh) {
@@ -358,8 +368,8 @@ TEST_F(FusionFixture, TheChunkedMeshFollowsTheMapSendingOnlyWhatChanged) {
   EXPECT_GT(changed.size(), 0u);
   EXPECT_LT(changed.size(), all_chunks / 4);
   apply(changed);
-  EXPECT_EQ(shownTriangles(), extractMesh(sparse).triangles.size());
-  // Chunk by chunk, what the viewer holds is what meshing the map afresh gives.
+  // Chunk by chunk, what the viewer holds is what meshing the map afresh gives (which is the
+  // whole mesh, as the first update showed).
   std::map<uint64_t, size_t> expected;
   for (const ChunkedMesher::Chunk& chunk : ChunkedMesher().update(sparse, sparse.revision())) {
     expected[SparseTsdfMap::keyOf(chunk.index)] = chunk.mesh.triangles.size();
