@@ -22,11 +22,14 @@ sdf_tracker_part(map SOURCES block_swap sparse_tsdf_map tsdf_map tsdf_volume DEP
 sdf_tracker_part(fusion SOURCES integrator DEPENDS camera map)
 sdf_tracker_part(tracking SOURCES motion_model tracker DEPENDS camera map)
 sdf_tracker_part(surface SOURCES chunked_mesh raycaster surface DEPENDS camera map)
-sdf_tracker_part(pipeline SOURCES parameters pipeline DEPENDS fusion tracking surface)
+# Finding the camera again: the places the map was built from, and the search among them.
+sdf_tracker_part(places SOURCES place_descriptor place_memory DEPENDS camera)
+sdf_tracker_part(relocalisation SOURCES coarse_field relocaliser DEPENDS tracking surface places)
+sdf_tracker_part(pipeline SOURCES parameters pipeline DEPENDS fusion tracking surface relocalisation)
 
 # Around the tracker: files (OpenCV for PNG only), the synthetic scenes, trajectory errors.
 sdf_tracker_part(io SOURCES depth_png files map_file mesh_file sdfmap_file trajectory_file tum_sequence vti_file
-  DEPENDS camera map surface LINK ${OpenCV_LIBS})
+  DEPENDS camera map surface places LINK ${OpenCV_LIBS})
 target_include_directories(sdf_tracker_io SYSTEM PRIVATE ${OpenCV_INCLUDE_DIRS})
 sdf_tracker_part(sim SOURCES synthetic DEPENDS io)
 sdf_tracker_part(eval SOURCES evaluation DEPENDS io)
@@ -55,13 +58,15 @@ set(SDF_TRACKER_UNIT_TEST_SOURCES
   ${SDF_TRACKER_TEST_DIR}/unit/test_parameters.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_pipeline.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_raycaster.cpp
+  ${SDF_TRACKER_TEST_DIR}/unit/test_relocalisation.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_sparse_map.cpp
 )
 set(SDF_TRACKER_UNIT_TEST_LIBRARIES sdf_tracker_pipeline sdf_tracker_io sdf_tracker_sim sdf_tracker_eval)
 # Whole sequences through the pipeline, synthetic and (when ../shared/data has them) real: seconds
 # to a minute each, run in the release build only.
 set(SDF_TRACKER_SEQUENCE_TEST_SOURCES ${SDF_TRACKER_TEST_DIR}/support/test_main.cpp
-  ${SDF_TRACKER_TEST_DIR}/sequences/test_end_to_end.cpp ${SDF_TRACKER_TEST_DIR}/sequences/test_map_sequences.cpp)
+  ${SDF_TRACKER_TEST_DIR}/sequences/test_end_to_end.cpp ${SDF_TRACKER_TEST_DIR}/sequences/test_map_sequences.cpp
+  ${SDF_TRACKER_TEST_DIR}/sequences/test_relocalisation_runs.cpp)
 # The command-line tools' tests: their libraries, and the programs run as a user runs them.
 set(SDF_TRACKER_TOOLS_TEST_SOURCES ${SDF_TRACKER_TEST_DIR}/support/test_main.cpp
   ${SDF_TRACKER_TEST_DIR}/tools/test_tools.cpp ${SDF_TRACKER_TEST_DIR}/tools/test_devices.cpp)

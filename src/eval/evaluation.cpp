@@ -85,6 +85,47 @@ AteResult computeAte(const std::vector<io::StampedPose>& estimate, const std::ve
   return result;
 }
 
+size_t LocalisationResult::within(double translation_m, double rotation_rad) const {
+  size_t n = 0;
+  for (size_t i = 0; i < timestamps_s.size(); ++i) {
+    n += translation_errors_m[i] <= translation_m && rotation_errors_rad[i] <= rotation_rad;
+  }
+  return n;
+}
+
+LocalisationResult computeLocalisation(const std::vector<io::StampedPose>& estimate,
+                                       const std::vector<io::StampedPose>& ground_truth,
+                                       const std::vector<io::StampedPose>& reference, double max_difference_s) {
+  LocalisationResult result;
+  // The rigid alignment of whole poses: each pose is its position and two points 0.5 m along its
+  // viewing and right axes, so that orientations are aligned as well as positions.
+  const auto matches = associate(reference, ground_truth, max_difference_s);
+  if (matches.size() < 3) {
+    throw std::invalid_argument("only " + std::to_string(matches.size()) + " reference poses have a ground-truth "
+                                "pose within " + std::to_string(max_difference_s) + " s; the alignment needs 3");
+  }
+  Eigen::Matrix3Xd in_frame(3, 3 * matches.size()), in_gt(3, 3 * matches.size());
+  for (size_t m = 0; m < matches.size(); ++m) {
+    const Eigen::Isometry3d& a = reference[matches[m].first].T_W_C;
+    const Eigen::Isometry3d& b = ground_truth[matches[m].second].T_W_C;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d offset = k == 0 ? Eigen::Vector3d(Eigen::Vector3d::Zero())
+                                            : Eigen::Vector3d(0.5 * Eigen::Vector3d::Unit(k == 1 ? 2 : 0));
+      in_frame.col(3 * m + k) = a * offset;
+      in_gt.col(3 * m + k) = b * offset;
+    }
+  }
+  result.T_frame_gt.matrix() = Eigen::umeyama(in_gt, in_frame, false);
+  for (const auto& [e, g] : associate(estimate, ground_truth, max_difference_s)) {
+    const Eigen::Isometry3d truth = result.T_frame_gt * ground_truth[g].T_W_C;
+    const Eigen::Isometry3d error = truth.inverse() * estimate[e].T_W_C;
+    result.timestamps_s.push_back(estimate[e].timestamp_s);
+    result.translation_errors_m.push_back(error.translation().norm());
+    result.rotation_errors_rad.push_back(Eigen::AngleAxisd(error.rotation()).angle());
+  }
+  return result;
+}
+
 RpeResult computeRpe(const std::vector<io::StampedPose>& estimate, const std::vector<io::StampedPose>& ground_truth,
                      double window_s, double max_difference_s) {
   const auto matches = associate(estimate, ground_truth, max_difference_s);

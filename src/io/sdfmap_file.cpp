@@ -30,7 +30,8 @@ class Fnv1a {
 };
 
 constexpr char kMapMagic[8] = {'S', 'D', 'F', 'T', 'M', 'A', 'P', '\n'};
-constexpr uint32_t kMapVersion = 1;
+constexpr uint32_t kMapVersion = 2;
+constexpr uint32_t kFirstMapVersion = 1;  ///< no place memory
 
 /// The header of a .sdfmap file, field by field as stored.
 #pragma pack(push, 1)
@@ -47,12 +48,46 @@ struct MapFileBlock {
   int32_t index[3];
   Voxel voxels[kBlockVoxels];
 };
+/// Version 2's place memory header, right after MapFileHeader.
+struct PlacesHeader {
+  uint64_t keyframe_count;
+  int32_t grid_width;
+  int32_t grid_height;
+  int32_t fern_count;
+  int32_t tests_per_fern;
+  uint64_t seed;
+  double min_test_depth_m;
+  double max_test_depth_m;
+};
+struct KeyframePose {
+  double position[3];
+  double orientation[4];  ///< qx qy qz qw
+};
 #pragma pack(pop)
-static_assert(sizeof(MapFileHeader) == 64 && sizeof(Voxel) == 8, "the .sdfmap layout is fixed");
+static_assert(sizeof(MapFileHeader) == 64 && sizeof(PlacesHeader) == 48 && sizeof(KeyframePose) == 56 &&
+                  sizeof(Voxel) == 8,
+              "the .sdfmap layout is fixed");
+
+/// Why a saved keyframe cannot be one ("" when it can).
+std::string keyframeProblem(const KeyframePose& pose, const uint8_t* code, const PlaceDescriptorConfig& descriptor) {
+  for (double x : pose.position) {
+    if (!std::isfinite(x) || std::fabs(x) > 1e7) return "position " + std::to_string(x) + " m is not a place";
+  }
+  double norm2 = 0.0;
+  for (double q : pose.orientation) norm2 += std::isfinite(q) ? q * q : 1e300;
+  if (std::fabs(std::sqrt(norm2) - 1.0) > 1e-6) return "orientation of norm " + std::to_string(std::sqrt(norm2)) + " (not a unit quaternion)";
+  for (int f = 0; f < descriptor.fern_count; ++f) {
+    if (code[f] >> descriptor.tests_per_fern) {
+      return "fern " + std::to_string(f) + " has code " + std::to_string(code[f]) + ", beyond its " +
+             std::to_string(descriptor.tests_per_fern) + " bits";
+    }
+  }
+  return "";
+}
 
 }  // namespace
 
-void writeSparseMap(const std::string& path, const SparseTsdfMap& map) {
+void writeSparseMap(const std::string& path, const SparseTsdfMap& map, const PlaceMemory* places) {
   MapFileHeader header;
   std::memcpy(header.magic, kMapMagic, sizeof(kMapMagic));
   header.version = kMapVersion;
@@ -62,6 +97,16 @@ void writeSparseMap(const std::string& path, const SparseTsdfMap& map) {
   for (int axis = 0; axis < 3; ++axis) header.origin_W[axis] = map.config().origin_W[axis];
   const std::vector<SparseTsdfMap::BlockIndex> indices = map.blockIndices();
   header.block_count = indices.size();
+  const PlaceDescriptorConfig descriptor = places ? places->config().descriptor : PlaceDescriptorConfig();
+  PlacesHeader places_header;
+  places_header.keyframe_count = places ? places->keyframes().size() : 0;
+  places_header.grid_width = descriptor.grid_width;
+  places_header.grid_height = descriptor.grid_height;
+  places_header.fern_count = descriptor.fern_count;
+  places_header.tests_per_fern = descriptor.tests_per_fern;
+  places_header.seed = descriptor.seed;
+  places_header.min_test_depth_m = descriptor.min_test_depth_m;
+  places_header.max_test_depth_m = descriptor.max_test_depth_m;
 
   AtomicOutput out(path);
   Fnv1a hash;
@@ -70,6 +115,7 @@ void writeSparseMap(const std::string& path, const SparseTsdfMap& map) {
     out.stream().write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
   };
   put(&header, sizeof(header));
+  put(&places_header, sizeof(places_header));
   auto record = std::make_unique<MapFileBlock>();
   for (const SparseTsdfMap::BlockIndex& index : indices) {
     for (int axis = 0; axis < 3; ++axis) record->index[axis] = index[axis];
@@ -77,12 +123,23 @@ void writeSparseMap(const std::string& path, const SparseTsdfMap& map) {
     std::copy(block.voxels.begin(), block.voxels.end(), record->voxels);
     put(record.get(), sizeof(MapFileBlock));
   }
+  if (places) {
+    for (const Keyframe& keyframe : places->keyframes()) {
+      KeyframePose pose;
+      const Eigen::Quaterniond q(keyframe.T_W_C.rotation());
+      for (int axis = 0; axis < 3; ++axis) pose.position[axis] = keyframe.T_W_C.translation()[axis];
+      const double orientation[4] = {q.x(), q.y(), q.z(), q.w()};
+      std::copy(orientation, orientation + 4, pose.orientation);
+      put(&pose, sizeof(pose));
+      put(keyframe.code.data(), keyframe.code.size());
+    }
+  }
   const uint64_t checksum = hash.value();
   out.stream().write(reinterpret_cast<const char*>(&checksum), sizeof(checksum));
   out.commit();
 }
 
-SparseTsdfMap readSparseMap(const std::string& path) {
+SparseTsdfMap readSparseMap(const std::string& path, std::optional<SavedPlaces>* places) {
   uint64_t file_bytes = 0;
   std::ifstream in = openForReading(path, &file_bytes);
   MapFileHeader header;
@@ -90,9 +147,9 @@ SparseTsdfMap readSparseMap(const std::string& path) {
       std::memcmp(header.magic, kMapMagic, sizeof(kMapMagic)) != 0) {
     throwFileError(path, "not an sdf_tracker map (.sdfmap) file");
   }
-  if (header.version != kMapVersion) {
-    throwFileError(path, "format version " + std::to_string(header.version) + "; this build reads version " +
-                   std::to_string(kMapVersion));
+  if (header.version != kMapVersion && header.version != kFirstMapVersion) {
+    throwFileError(path, "format version " + std::to_string(header.version) + "; this build reads versions " +
+                   std::to_string(kFirstMapVersion) + " to " + std::to_string(kMapVersion));
   }
   if (header.block_side != static_cast<uint32_t>(kBlockSide)) {
     throwFileError(path, "blocks of " + std::to_string(header.block_side) + "^3 voxels; this build uses " +
@@ -106,22 +163,51 @@ SparseTsdfMap readSparseMap(const std::string& path) {
   if (const auto violations = config.validate(); !violations.empty()) {
     throwFileError(path, "invalid map geometry: " + violations.front());
   }
-  // The length must match the block count exactly before anything is allocated for the blocks.
+  Fnv1a hash;
+  hash.add(&header, sizeof(header));
+  // Version 2: the place memory's header, and what its keyframes take.
+  PlacesHeader places_header{};
+  PlaceDescriptorConfig descriptor;
+  uint64_t keyframe_bytes = 0;
+  const bool has_places = header.version >= 2;
+  if (has_places) {
+    if (file_bytes < sizeof(header) + sizeof(places_header) ||
+        !in.read(reinterpret_cast<char*>(&places_header), sizeof(places_header))) {
+      throwFileError(path, "truncated in the place memory's header");
+    }
+    hash.add(&places_header, sizeof(places_header));
+    descriptor.grid_width = places_header.grid_width;
+    descriptor.grid_height = places_header.grid_height;
+    descriptor.fern_count = places_header.fern_count;
+    descriptor.tests_per_fern = places_header.tests_per_fern;
+    descriptor.seed = places_header.seed;
+    descriptor.min_test_depth_m = places_header.min_test_depth_m;
+    descriptor.max_test_depth_m = places_header.max_test_depth_m;
+    if (const auto violations = descriptor.validate(); !violations.empty()) {
+      throwFileError(path, "invalid place descriptor: " + violations.front());
+    }
+    keyframe_bytes = sizeof(KeyframePose) + static_cast<uint64_t>(descriptor.fern_count);
+  }
+  // The length must match the counts exactly before anything is allocated for blocks or keyframes.
   const uint64_t block_bytes = sizeof(MapFileBlock);
-  const uint64_t payload = file_bytes - sizeof(header);
-  if (payload < sizeof(uint64_t) || (payload - sizeof(uint64_t)) / block_bytes != header.block_count ||
-      (payload - sizeof(uint64_t)) % block_bytes != 0) {
-    // In 64 bits the product may wrap for a count no file could hold: say so rather than a wrong size.
-    const bool representable = header.block_count < (UINT64_MAX - sizeof(uint64_t)) / block_bytes;
-    throwFileError(path, "its header lists " + std::to_string(header.block_count) + " blocks (" +
-                             (representable ? std::to_string(header.block_count * block_bytes + sizeof(uint64_t))
-                                            : std::string("more than 2^64")) +
+  const uint64_t headers = sizeof(header) + (has_places ? sizeof(places_header) : 0);
+  const uint64_t payload = file_bytes - headers;
+  // In 64 bits the sum may wrap for counts no file could hold: say so rather than a wrong size.
+  const uint64_t limit = UINT64_MAX / 4;
+  const bool representable = header.block_count < limit / block_bytes &&
+                             (keyframe_bytes == 0 || places_header.keyframe_count < limit / keyframe_bytes);
+  const uint64_t expected = representable ? header.block_count * block_bytes +
+                                                places_header.keyframe_count * keyframe_bytes + sizeof(uint64_t)
+                                          : 0;
+  if (!representable || payload != expected) {
+    std::string listed = std::to_string(header.block_count) + " blocks";
+    if (has_places) listed += " and " + std::to_string(places_header.keyframe_count) + " keyframes";
+    throwFileError(path, "its header lists " + listed + " (" +
+                             (representable ? std::to_string(expected) : std::string("more than 2^62")) +
                              " bytes after the header) but the file holds " + std::to_string(payload) +
                              " bytes after the header: truncated or not written by this package");
   }
 
-  Fnv1a hash;
-  hash.add(&header, sizeof(header));
   SparseTsdfMap map(config);
   auto record = std::make_unique<MapFileBlock>();
   try {
@@ -144,9 +230,35 @@ SparseTsdfMap readSparseMap(const std::string& path) {
   } catch (const std::bad_alloc&) {
     throwFileError(path, "not enough memory for its " + std::to_string(header.block_count) + " blocks");
   }
+  SavedPlaces saved;
+  saved.descriptor = descriptor;
+  std::vector<uint8_t> code(static_cast<size_t>(has_places ? descriptor.fern_count : 0));
+  for (uint64_t k = 0; k < places_header.keyframe_count; ++k) {
+    KeyframePose pose;
+    if (!in.read(reinterpret_cast<char*>(&pose), sizeof(pose)) ||
+        !in.read(reinterpret_cast<char*>(code.data()), static_cast<std::streamsize>(code.size()))) {
+      throwFileError(path, "read failed in keyframe " + std::to_string(k));
+    }
+    hash.add(&pose, sizeof(pose));
+    hash.add(code.data(), code.size());
+    const std::string problem = keyframeProblem(pose, code.data(), descriptor);
+    if (!problem.empty()) throwFileError(path, "keyframe " + std::to_string(k) + ": " + problem);
+    Keyframe keyframe;
+    keyframe.T_W_C.translation() = Eigen::Vector3d(pose.position[0], pose.position[1], pose.position[2]);
+    keyframe.T_W_C.linear() =
+        Eigen::Quaterniond(pose.orientation[3], pose.orientation[0], pose.orientation[1], pose.orientation[2])
+            .normalized()
+            .toRotationMatrix();
+    keyframe.code = code;
+    saved.keyframes.push_back(std::move(keyframe));
+  }
   uint64_t checksum = 0;
   if (!in.read(reinterpret_cast<char*>(&checksum), sizeof(checksum)) || checksum != hash.value()) {
     throwFileError(path, "checksum mismatch: the file is corrupt");
+  }
+  if (places) {
+    places->reset();
+    if (has_places) *places = std::move(saved);
   }
   return map;
 }

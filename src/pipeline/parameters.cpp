@@ -319,6 +319,20 @@ std::vector<ParameterSpec> buildTable() {
   t.push_back(bound<int>("ResetAfterFailures", "frames", "clear the map after this many failed frames in a row; 0 never",
                          closed(0, 1e6), same(0), kLive, kAll,
                          [](auto& s) -> auto& { return s.pipeline.reset_after_failures; }));
+  t.push_back(bound<bool>("Relocalise", "",
+                          "when tracking from the held pose fails, and in a loaded map: search the whole map for the "
+                          "camera, fusing nothing until a candidate is confirmed (off: the held pose only)",
+                          {}, {true, false, false}, kLive, kAll, [](auto& s) -> auto& { return s.pipeline.relocalise; }));
+  t.push_back(bound<int>("RelocaliseCandidates", "", "keyframes a relocalising frame tries (each ~10-30 ms)",
+                         closed(0, 1000), same(3), kLive, kAll,
+                         [](auto& s) -> auto& { return s.pipeline.relocaliser.candidates_per_frame; }));
+  t.push_back(bound<int>("RelocaliseConfirmFrames", "frames",
+                         "frames in a row a candidate must go on tracking before it is accepted", closed(1, 1000),
+                         same(3), kLive, kAll, [](auto& s) -> auto& { return s.pipeline.relocaliser.confirm_frames; }));
+  t.push_back(bound<double>("RelocaliseMinOverlap", "",
+                            "a candidate is kept only with this fraction of the image's points near mapped surfaces",
+                            closed(0.0, 1.0), same(0.85), kLive, kAll,
+                            [](auto& s) -> auto& { return s.pipeline.relocaliser.min_overlap; }));
   for (int axis = 0; axis < 3; ++axis) {
     t.push_back(bound<double>(kInitialCameraParameters[axis], "",
                               std::string("dense grid: first camera's place along ") + char('x' + axis) +

@@ -15,6 +15,9 @@ namespace sdf_tracker {
 
 namespace {
 
+/// Failed frames after which a fit from the held pose is no longer taken without confirmation.
+constexpr int kBriefLossFrames = 2;
+
 double millisecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
@@ -56,6 +59,8 @@ std::vector<std::string> PipelineConfig::validate() const {
   v.merge("integrator.", integrator.validate());
   v.merge("tracker.", tracker.validate());
   v.merge("raycast.", raycast.validate());
+  v.merge("places.", places.validate());
+  v.merge("relocaliser.", relocaliser.validate());
   v.requireNonNegative("min_depth_m", min_depth_m);
   v.require(max_depth_m > min_depth_m, "max_depth_m must be > min_depth_m (got " + std::to_string(max_depth_m) +
                                            " <= " + std::to_string(min_depth_m) + ")");
@@ -93,11 +98,16 @@ SdfPipeline::SdfPipeline(const PipelineConfig& config)
   budget_ = makeBudget(config, map_->type());
   integrator_ = std::make_unique<Integrator>(config.integrator);
   tracker_ = std::make_unique<Tracker>(config.tracker);
+  places_ = std::make_unique<PlaceMemory>(config.places);
+  relocaliser_ = std::make_unique<Relocaliser>(config.relocaliser, config.tracker);
 }
 
 void SdfPipeline::clearMap() {
   map_->clear();
   if (budget_) budget_->clear();
+  places_->clear();
+  relocaliser_->cancel();
+  pose_unknown_ = false;
   map_initialised_ = false;
   consecutive_failures_ = 0;
 }
@@ -108,15 +118,27 @@ void SdfPipeline::reset() {
   motion_.clear();
 }
 
-void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map) {
+void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemory> places) {
   if (!map) throw std::invalid_argument("setMap: no map");
   map_ = std::move(map);
   config_.volume = map_->config();
   budget_ = makeBudget(config_, map_->type());
+  places_ = places ? std::move(places) : std::make_unique<PlaceMemory>(config_.places);
   T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   map_initialised_ = true;
   consecutive_failures_ = 0;
   motion_.clear();
+  relocaliser_->cancel();
+  pose_unknown_ = config_.relocalise;
+  search_guess_.reset();  // the start pose is tried anyway, as the held pose
+}
+
+void SdfPipeline::relocalise(const std::optional<Eigen::Isometry3d>& guess) {
+  if (!config_.relocalise) throw std::logic_error("relocalisation is off (Relocalise)");
+  if (!map_initialised_) throw std::logic_error("nothing is mapped yet: there is nowhere to relocalise in");
+  relocaliser_->cancel();
+  pose_unknown_ = true;
+  search_guess_ = guess;
 }
 
 void SdfPipeline::updateConfig(const PipelineConfig& candidate) {
@@ -127,8 +149,14 @@ void SdfPipeline::updateConfig(const PipelineConfig& candidate) {
     throw std::invalid_argument(
         "the grid (size, cell size, positive truncation, voxel storage, placement, memory bound) cannot change live");
   }
+  if (candidate.places.descriptor != config_.places.descriptor) {
+    throw std::invalid_argument("the place memory's descriptor cannot change live");
+  }
   integrator_ = std::make_unique<Integrator>(candidate.integrator);
   tracker_ = std::make_unique<Tracker>(candidate.tracker);
+  // A search under way starts again with the new settings at the next frame that needs one.
+  relocaliser_ = std::make_unique<Relocaliser>(candidate.relocaliser, candidate.tracker);
+  if (!candidate.relocalise) pose_unknown_ = false;
   if (candidate.max_prediction_gap_s != config_.max_prediction_gap_s) motion_ = MotionModel(candidate.max_prediction_gap_s);
   config_ = candidate;
 }
@@ -187,6 +215,54 @@ std::unique_ptr<TsdfMap> SdfPipeline::copyWholeMap() const {
   return std::make_unique<SparseTsdfMap>(budget_->whole(static_cast<const SparseTsdfMap&>(*map_)));
 }
 
+bool SdfPipeline::search(const DepthImage& filtered, const PinholeCamera& camera, FrameReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  RelocalisationReport& r = report->relocalisation;
+  r.searched = true;
+  const std::string tracking_failure = report->track.message;
+  if (!relocaliser_->searching()) {
+    try {
+      relocaliser_->begin(*map_);
+    } catch (const std::invalid_argument& e) {
+      pose_unknown_ = false;  // an empty map: the next frame is tracked from the held pose
+      r.message = std::string("no search: ") + e.what();
+      return false;
+    }
+    // A pose the user gave first, then the one held (the last known, or the map's start pose).
+    search_guesses_.clear();
+    if (pose_unknown_ && search_guess_) search_guesses_.push_back(*search_guess_);
+    search_guesses_.push_back(T_W_C_);
+  }
+  const Relocaliser::Step step = relocaliser_->step(filtered, camera, *map_, *places_, search_guesses_);
+  r.outcome = step.outcome;
+  r.candidates_tried = step.candidates_tried;
+  r.frames_spent = relocaliser_->framesSpent();
+  r.confirmed = step.confirmed;
+  r.message = step.message;
+  r.search_ms = millisecondsSince(start);
+  if (step.outcome == Relocaliser::Outcome::kAccepted) {
+    report->track = step.track;
+    T_W_C_ = step.T_W_C;
+    pose_unknown_ = false;
+    return true;
+  }
+  std::ostringstream s;
+  s << "relocalising: " << r.frames_spent << (r.frames_spent == 1 ? " frame, " : " frames, ")
+    << relocaliser_->candidatesTried() << " candidates tried";
+  if (step.outcome == Relocaliser::Outcome::kConfirming) {
+    s << "; a candidate fits, confirmed on " << step.confirmed << " of " << relocaliser_->config().confirm_frames
+      << " frames";
+  } else if (!step.message.empty()) {
+    s << "; " << step.message;
+  }
+  if (!tracking_failure.empty()) s << " (from the held pose: " << tracking_failure << ")";
+  report->track.status = TrackStatus::kRelocalising;
+  report->track.T_W_C = T_W_C_;
+  report->track.pose_estimated = false;
+  report->track.message = s.str();
+  return false;
+}
+
 FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s) {
   return process(depth, camera, timestamp_s, std::nullopt);
 }
@@ -229,6 +305,19 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     report.track.T_W_C = T_W_C_;
     report.track.message = "first frame: map initialised at the start pose";
     report.initialised_map = true;
+  } else if (!given_T_W_C && pose_unknown_) {
+    // The pose is not known at all (a loaded map, relocalise()): only a confirmed candidate
+    // tells where the camera is.
+    const auto start = std::chrono::steady_clock::now();
+    restoreNear(T_W_C_, ideal_camera, furthest_m, &report);
+    const bool found = search(filtered, ideal_camera, &report);
+    report.tracking_ms = millisecondsSince(start);
+    if (!found) {
+      ++consecutive_failures_;
+      motion_.clear();
+      return report;
+    }
+    consecutive_failures_ = 0;
   } else {
     const auto start = std::chrono::steady_clock::now();
     const Eigen::Isometry3d predicted = given_T_W_C ? *given_T_W_C : predictPose(timestamp_s);
@@ -242,12 +331,26 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
       if (from_last.tracked()) report.track = std::move(from_last);
     }
     report.tracking_ms = millisecondsSince(start);
+    // In a brief loss the camera cannot have gone far: a fit from the held pose is taken at once.
+    // After a longer one the camera may be anywhere (carried with its view blocked), and a fit
+    // there must be confirmed like any candidate: the held pose stays until then.
+    const bool brief_loss = consecutive_failures_ <= kBriefLossFrames || !config_.relocalise;
     if (given_T_W_C) {
       T_W_C_ = *given_T_W_C;  // the estimate is reported; the given pose is fused
-    } else if (report.track.pose_estimated) {
+    } else if (report.track.pose_estimated && brief_loss) {
       T_W_C_ = report.track.T_W_C;
     }
-    if (!given_T_W_C && !report.track.tracked()) {
+    bool found = false;
+    if (given_T_W_C) {
+      relocaliser_->cancel();
+    } else if (report.track.tracked() && brief_loss) {
+      relocaliser_->cancel();  // back from the held pose: the search, if any, is over
+    } else if (config_.relocalise) {
+      // Not from the prediction, nor from the held pose: search the whole map.
+      found = search(filtered, ideal_camera, &report);
+      report.tracking_ms = millisecondsSince(start);
+    }
+    if (!given_T_W_C && !found && (!report.track.tracked() || !brief_loss)) {
       ++consecutive_failures_;
       motion_.clear();
       return report;  // never fuse on a failed frame
@@ -255,6 +358,7 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     consecutive_failures_ = 0;
   }
   motion_.addTracked(timestamp_s, T_W_C_);
+  if (config_.relocalise) report.added_keyframe = places_->offer(filtered, T_W_C_);
 
   const Eigen::Isometry3d motion = T_W_C_last_fused_.inverse() * T_W_C_;
   const double change = std::hypot(motion.translation().norm(), rotationAngle(motion));

@@ -69,9 +69,21 @@ std::string MapServices::outputPath(const std::string& requested, const std::str
   return requested.empty() ? options_.output_directory + "/" + default_name : requested;
 }
 
-std::unique_ptr<st::TsdfMap> MapServices::copyMap(std::vector<st::io::StampedPose>* trajectory) {
+std::string describePlaces(size_t keyframes, bool relocalise) {
+  if (!relocalise) return "; Relocalise is off: tracking starts at the map's start pose";
+  if (keyframes == 0) {
+    return "; it holds no place memory (a .vti, or a .sdfmap of format version 1): the camera is searched for "
+           "from the map's start pose only";
+  }
+  return "; its place memory holds " + std::to_string(keyframes) +
+         " keyframes: the camera is searched for in it, and nothing is fused until it is found";
+}
+
+std::unique_ptr<st::TsdfMap> MapServices::copyMap(std::vector<st::io::StampedPose>* trajectory,
+                                                  st::PlaceMemory* places) {
   std::lock_guard<std::mutex> lock(state_.mutex);
   if (trajectory) *trajectory = state_.trajectory;
+  if (places) *places = state_.pipeline->places();
   return state_.pipeline->copyWholeMap();  // swapped blocks (MaxMemoryMB) included
 }
 
@@ -84,7 +96,8 @@ void MapServices::writeTrajectory(const std::vector<st::io::StampedPose>& trajec
 
 bool MapServices::writeAtShutdown() {
   std::vector<st::io::StampedPose> trajectory;
-  const std::unique_ptr<st::TsdfMap> map = copyMap(&trajectory);
+  st::PlaceMemory places;
+  const std::unique_ptr<st::TsdfMap> map = copyMap(&trajectory, &places);
   bool all_written = true;
   auto attempt = [&all_written](const char* what, const std::string& path, const std::function<void()>& write) {
     try {
@@ -114,7 +127,7 @@ bool MapServices::writeAtShutdown() {
   }
   if (options_.output_volume) {
     const std::string path = outputPath("", "sdf_volume.vti");
-    attempt("volume", path, [&] { st::io::writeMap(path, *map); });
+    attempt("volume", path, [&] { st::io::writeMap(path, *map, &places); });
   }
   std::fflush(stdout);
   return all_written;
@@ -156,9 +169,12 @@ bool MapServices::saveVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
   return answer(res, [&] {
     const std::string path = outputPath(req.path, "sdf_volume.vti");
     std::vector<st::io::StampedPose> trajectory;
-    st::io::writeMap(path, *copyMap(&trajectory));
+    st::PlaceMemory places;
+    st::io::writeMap(path, *copyMap(&trajectory, &places), &places);
     writeTrajectory(trajectory);
-    return "wrote the map to " + path;
+    return "wrote the map to " + path + (st::io::hasExtension(path, ".sdfmap")
+                                            ? " with " + std::to_string(places.keyframes().size()) + " keyframes"
+                                            : std::string(" (a .vti keeps no place memory)"));
   });
 }
 
@@ -189,16 +205,21 @@ bool MapServices::loadVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
   return answer(res, [&] {
     const std::string path = outputPath(req.path, "sdf_volume.vti");
     bool compact;
+    st::PlaceMemoryConfig places_config;
     {
       std::lock_guard<std::mutex> lock(state_.mutex);
       compact = state_.pipeline->config().volume.compact_voxels;
+      places_config = state_.pipeline->config().places;
     }
-    std::unique_ptr<st::TsdfMap> loaded = st::io::readMap(path, compact);  // read before taking the lock
+    // Read before taking the lock.
+    std::unique_ptr<st::PlaceMemory> places;
+    std::unique_ptr<st::TsdfMap> loaded = st::io::readMap(path, compact, &places, places_config);
+    const size_t keyframes = places ? places->keyframes().size() : 0;
     std::lock_guard<std::mutex> lock(state_.mutex);
-    state_.pipeline->setMap(std::move(loaded));
+    state_.pipeline->setMap(std::move(loaded), std::move(places));
     state_.trajectory.clear();
     state_.restarted = true;
-    return "tracking against " + path;
+    return "tracking against " + path + describePlaces(keyframes, state_.pipeline->config().relocalise);
   });
 }
 

@@ -43,9 +43,13 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
   camera_settings_ = settings.camera;
   state_.pipeline = std::make_unique<st::SdfPipeline>(settings.pipeline);
   if (options_.load_volume != "none" && !options_.load_volume.empty()) {
-    state_.pipeline->setMap(st::io::readMap(options_.load_volume, settings.pipeline.volume.compact_voxels));
-    ROS_INFO("sdf_tracker: tracking against the map in %s (%s)", options_.load_volume.c_str(),
-             state_.pipeline->config().volume.describe().c_str());
+    std::unique_ptr<st::PlaceMemory> places;
+    std::unique_ptr<st::TsdfMap> map = st::io::readMap(options_.load_volume, settings.pipeline.volume.compact_voxels,
+                                                       &places, settings.pipeline.places);
+    state_.pipeline->setMap(std::move(map), std::move(places));
+    ROS_INFO("sdf_tracker: tracking against the map in %s (%s)%s", options_.load_volume.c_str(),
+             state_.pipeline->config().volume.describe().c_str(),
+             describePlaces(state_.pipeline->places().keyframes().size(), settings.pipeline.relocalise).c_str());
   }
 
   poses_ = std::make_unique<PoseBroadcaster>(nh_, pnh_, options_);
@@ -295,7 +299,7 @@ void TrackerServer::process(const Frame& frame) {
   static_assert(int(Status::kOk) == Msg::OK && int(Status::kNotConverged) == Msg::NOT_CONVERGED &&
                 int(Status::kTooFewPoints) == Msg::TOO_FEW_POINTS && int(Status::kDegenerate) == Msg::DEGENERATE &&
                 int(Status::kDiverged) == Msg::DIVERGED && int(Status::kBadInput) == Msg::BAD_INPUT &&
-                int(Status::kLowOverlap) == Msg::LOW_OVERLAP);
+                int(Status::kLowOverlap) == Msg::LOW_OVERLAP && int(Status::kRelocalising) == Msg::RELOCALISING);
   status.status = static_cast<uint8_t>(t.status);
   status.status_text = statusText(t);
   status.iterations_per_level = t.iterations_per_level;

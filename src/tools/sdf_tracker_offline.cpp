@@ -59,7 +59,11 @@ Tracks a depth camera through a TUM-layout sequence and reconstructs the scene.
                         else TUM's published one when the intrinsics are TUM freiburg1/2's)
   --load-volume FILE    track against a saved map instead of starting empty: a .sdfmap
                         (--save-map; loads sparse) or a .vti (--save-volume; loads dense)
-  --save-map            also write the map as map.sdfmap (every block, exactly; reloadable)
+  --initial-pose TX,TY,TZ,QX,QY,QZ,QW  with --load-volume: where the first camera is in the
+                        loaded map (camera to map, metres and a unit quaternion); verified like
+                        any relocalisation candidate before anything is fused (needs Relocalise)
+  --save-map            also write the map as map.sdfmap (every block, exactly, and the place
+                        memory; reloadable)
   --save-volume         also write the map as sdf_volume.vti (ParaView) and triangles.obj
   --volume-region X0,Y0,Z0,X1,Y1,Z1  with --save-volume: only the voxels in this box (metres,
                         the map's frame: the first camera's), e.g. one room of a large map
@@ -81,6 +85,21 @@ std::vector<double> parseNumberList(const std::string& option, const std::string
   std::string item;
   while (std::getline(in, item, ',')) values.push_back(st::parseNumber(option, item));
   return values;
+}
+
+/// --initial-pose: camera to map from TX,TY,TZ,QX,QY,QZ,QW (a unit quaternion, within 1e-3).
+Eigen::Isometry3d parseInitialPose(const std::string& text) {
+  const std::vector<double> v = parseNumberList("--initial-pose", text);
+  if (v.size() != 7) throw std::invalid_argument("--initial-pose: expected TX,TY,TZ,QX,QY,QZ,QW, got \"" + text + "\"");
+  const Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
+  if (std::abs(q.norm() - 1.0) > 1e-3) {
+    throw std::invalid_argument("--initial-pose " + text + ": the quaternion QX,QY,QZ,QW has norm " +
+                                std::to_string(q.norm()) + ", not 1");
+  }
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = q.normalized().toRotationMatrix();
+  T.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
+  return T;
 }
 
 st::LensDistortion parseDistortion(const std::string& text) {
@@ -200,7 +219,7 @@ int run(int argc, char** argv) {
   const st::tools::CommandLine args(
       argc, argv,
       {"sequence", "output", "preset", "param", "frames", "threads", "depth-factor", "intrinsics", "distortion",
-       "load-volume", "volume-region"},
+       "load-volume", "initial-pose", "volume-region"},
       {"save-map", "save-volume", "fuse-ground-truth", "raycast", "quiet", "list-params", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -280,11 +299,31 @@ int run(int argc, char** argv) {
   std::cout << camera.distortion.summary(sequence.distortionSource()) << "\n";
   if (!sequence.distortionHint().empty()) std::cout << "note: " << sequence.distortionHint() << "\n";
   st::SdfPipeline pipeline(settings.pipeline);
+  if (args.has("initial-pose") && !args.has("load-volume")) {
+    throw std::invalid_argument("--initial-pose places the camera in a loaded map (--load-volume); a new map "
+                                "starts at the first camera");
+  }
+  if (args.has("initial-pose") && !settings.pipeline.relocalise) {
+    throw std::invalid_argument("--initial-pose is verified by the relocaliser, which --param Relocalise=false "
+                                "turns off");
+  }
   if (args.has("load-volume")) {
-    pipeline.setMap(st::io::readMap(args.get("load-volume"), settings.pipeline.volume.compact_voxels));
+    const std::string& path = args.get("load-volume");
+    std::unique_ptr<st::PlaceMemory> places;
+    std::unique_ptr<st::TsdfMap> map =
+        st::io::readMap(path, settings.pipeline.volume.compact_voxels, &places, settings.pipeline.places);
+    pipeline.setMap(std::move(map), std::move(places));
+    if (pipeline.places().empty()) {
+      std::cout << "note: " << path << " holds no place memory (a .vti, or a .sdfmap of format version 1)"
+                << (settings.pipeline.relocalise ? ": the camera is searched for from the map's start pose only"
+                                                 : "")
+                << "\n";
+    } else {
+      std::cout << "place memory: " << pipeline.places().keyframes().size() << " keyframes from " << path << "\n";
+    }
     // The file's grid replaces the configured one: the rules between parameters must hold for it.
-    st::throwIfInvalid("parameters with the grid of " + args.get("load-volume"),
-                       st::Settings{pipeline.config(), settings.camera}.validate());
+    st::throwIfInvalid("parameters with the grid of " + path, st::Settings{pipeline.config(), settings.camera}.validate());
+    if (args.has("initial-pose")) pipeline.relocalise(parseInitialPose(args.get("initial-pose")));
   }
   if (volume_region) requireExportable(pipeline.map(), *volume_region, args.get("volume-region"));
   const auto& v = pipeline.config().volume;
@@ -307,6 +346,8 @@ int run(int argc, char** argv) {
   st::tools::ProgressBar progress(sequence.size(), !args.has("quiet"));
   const auto start = std::chrono::steady_clock::now();
   std::vector<double> single_frame_errors_m;  // --fuse-ground-truth
+  std::vector<double> search_ms;              // frames spent searching for the camera (Relocalise)
+  size_t relocalisations = 0;
   size_t without_ground_truth = 0;
   for (size_t i = 0; i < sequence.size(); ++i) {
     if (!true_T_W_C.empty() && !true_T_W_C[i]) {
@@ -335,6 +376,15 @@ int run(int argc, char** argv) {
                                        ? pipeline.processFrame(depth, camera, sequence.timestamp(i))
                                        : pipeline.processFrameAtPose(depth, camera, *true_T_W_C[i], sequence.timestamp(i));
     const st::TrackResult& t = report.track;
+    if (report.relocalisation.searched) {
+      search_ms.push_back(report.relocalisation.search_ms);
+      if (report.relocalisation.outcome == st::Relocaliser::Outcome::kAccepted) {
+        ++relocalisations;
+        if (!args.has("quiet")) {
+          std::cout << "\nframe " << i << ": relocalised after " << report.relocalisation.frames_spent << " frames\n";
+        }
+      }
+    }
     if (!t.tracked()) ++failed;
     if (t.tracked() && t.status == st::TrackStatus::kDegenerate) ++degenerate;
     if (t.tracked() && !report.initialised_map) ++tracked_in_map;
@@ -384,7 +434,7 @@ int run(int argc, char** argv) {
     const st::TriangleMesh mesh = st::extractMesh(map);
     st::io::writePly(output.path("mesh.ply"), mesh);
     st::io::writePly(output.path("cloud.ply"), st::extractSurfaceCloud(map));
-    if (args.has("save-map")) st::io::writeMap(output.path("map.sdfmap"), map);
+    if (args.has("save-map")) st::io::writeMap(output.path("map.sdfmap"), map, &pipeline.places());
     if (args.has("save-volume")) {
       if (volume_region) st::io::writeVti(output.path("sdf_volume.vti"), st::toDenseVolume(map, *volume_region));
       else st::io::writeMap(output.path("sdf_volume.vti"), map);
@@ -413,6 +463,13 @@ int run(int argc, char** argv) {
           << percentile(frame_ms, 0.5) << ", p95 " << percentile(frame_ms, 0.95) << "; tracking median "
           << percentile(tracking_ms, 0.5) << ", fusion median " << percentile(fusion_ms, 0.5);
   if (!raycast_ms.empty()) summary << ", ray casting median " << percentile(raycast_ms, 0.5);
+  if (!search_ms.empty()) {
+    summary << "\nrelocalisation: " << search_ms.size() << " frames searched the map for the camera (ms per frame: "
+            << "median " << percentile(search_ms, 0.5) << ", max " << percentile(search_ms, 1.0) << "), "
+            << relocalisations << " found it";
+  }
+  summary << "\nplace memory: " << pipeline.places().keyframes().size() << " keyframes, "
+          << pipeline.places().bytesPerKeyframe() << " bytes each";
   summary << "\nmemory: " << st::toString(v.type) << " map " << pipeline.map().memoryBytes() / 1048576.0 << " MiB";
   if (const st::MapMemoryBudget* budget = pipeline.memoryBudget()) {
     summary << " (MaxMemoryMB " << pipeline.config().max_map_memory_mb << "; " << budget->swap().size()
@@ -452,7 +509,11 @@ int run(int argc, char** argv) {
        << ",\n  \"grid_mb\": " << jsonNumber(pipeline.map().memoryBytes() / 1048576.0)
        << ",\n  \"swapped_mb\": "
        << jsonNumber(pipeline.memoryBudget() ? pipeline.memoryBudget()->swap().bytesOnDisk() / 1048576.0 : 0.0)
-       << ",\n  \"elapsed_s\": " << jsonNumber(elapsed_s);
+       << ",\n  \"elapsed_s\": " << jsonNumber(elapsed_s)
+       << ",\n  \"relocalisation\": {\"searched_frames\": " << search_ms.size() << ", \"found\": " << relocalisations
+       << ", \"ms_median\": " << jsonNumber(percentile(search_ms, 0.5))
+       << ", \"ms_max\": " << jsonNumber(percentile(search_ms, 1.0))
+       << ", \"keyframes\": " << pipeline.places().keyframes().size() << "}";
   if (!true_T_W_C.empty()) {
     const SingleFrameErrors errors(single_frame_errors_m);
     summary << errors.summaryLine(without_ground_truth);

@@ -189,6 +189,7 @@ const char* toString(TrackStatus status) {
     case TrackStatus::kDiverged: return "diverged";
     case TrackStatus::kBadInput: return "bad_input";
     case TrackStatus::kLowOverlap: return "low_overlap";
+    case TrackStatus::kRelocalising: return "relocalising";
   }
   return "unknown";
 }

@@ -1,4 +1,5 @@
-// Fuzz target: sdf_tracker binary maps (io::readSparseMap).
+// Fuzz target: sdf_tracker binary maps (io::readSparseMap), with their place memory.
+#include <optional>
 #include <stdexcept>
 
 #include "fuzz_input.h"
@@ -7,7 +8,8 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path = sdf_tracker::fuzz::writeInput(data, size, "map.sdfmap");
   try {
-    sdf_tracker::io::readSparseMap(path);
+    std::optional<sdf_tracker::io::SavedPlaces> places;
+    sdf_tracker::io::readSparseMap(path, &places);
   } catch (const std::runtime_error&) {
   }
   return 0;

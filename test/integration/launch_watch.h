@@ -51,6 +51,8 @@ class LaunchWatch {
   std::map<std::string, std::set<std::string>> parents;  ///< child frame -> its parents, slashes stripped
   std::vector<io::StampedPose> poses;                     ///< the tracker's estimates, as stamped
   ros::WallTime last_pose_wall;
+  /// Status messages: one per frame the node processed.
+  size_t statuses = 0;
   /// The node's counts, as its latest status message gives them.
   uint32_t frames_received = 0;
   uint32_t frames_dropped = 0;
@@ -70,6 +72,7 @@ class LaunchWatch {
 
   void onStatus(const sdf_tracker::TrackingStatus& msg) {
     std::lock_guard<std::mutex> lock(mutex);
+    ++statuses;
     frames_received = std::max(frames_received, msg.frames_received);
     frames_dropped = std::max(frames_dropped, msg.frames_dropped);
   }

@@ -228,6 +228,9 @@ TEST(Io, ADenseGridSavedAsASparseMapKeepsEveryObservedVoxel) {
   }
 }
 
+/// Where a .sdfmap's first block starts: after the map's header and the place memory's.
+constexpr size_t kFirstBlock = 64 + 48;
+
 /// The file's bytes with its FNV-1a checksum made right again, as a careful forger would.
 std::string withValidChecksum(std::string bytes) {
   uint64_t hash = 0xcbf29ce484222325ull;
@@ -250,25 +253,26 @@ TEST(Io, CorruptSparseMapsAreRefusedSayingWhatIsWrong) {
   EXPECT_TRUE(has(sparseMapError(dir, good + "x"), "truncated"));
   EXPECT_TRUE(has(sparseMapError(dir, "hello"), "not an sdf_tracker map"));
   std::string version = good;
-  version[8] = 2;
-  EXPECT_TRUE(has(sparseMapError(dir, version), "format version 2"));
+  version[8] = 3;
+  EXPECT_TRUE(has(sparseMapError(dir, version), "format version 3; this build reads versions 1 to 2"))
+      << sparseMapError(dir, version);
   std::string flipped = good;
-  flipped[64 + 12 + 1000] ^= 0x01;  // one bit of a voxel of the first block
+  flipped[kFirstBlock + 12 + 1000] ^= 0x01;  // one bit of a voxel of the first block
   EXPECT_TRUE(has(sparseMapError(dir, flipped), "checksum"));
   std::string not_a_number = good;
   const float nan = std::nanf("");
-  not_a_number.replace(64 + 12 + 8 * 5, sizeof(float), reinterpret_cast<const char*>(&nan), sizeof(float));
+  not_a_number.replace(kFirstBlock + 12 + 8 * 5, sizeof(float), reinterpret_cast<const char*>(&nan), sizeof(float));
   EXPECT_TRUE(has(sparseMapError(dir, not_a_number), "voxel 5: distance nan m is not within [-10, 0.08] m"))
       << sparseMapError(dir, not_a_number);
   // Values no fusion writes, even with a valid checksum: a weight beyond any MaxWeight, a distance
   // beyond the band.
   std::string heavy = good;
   const float huge = 1e30f;
-  heavy.replace(64 + 12 + 8 * 6 + 4, sizeof(float), reinterpret_cast<const char*>(&huge), sizeof(float));
+  heavy.replace(kFirstBlock + 12 + 8 * 6 + 4, sizeof(float), reinterpret_cast<const char*>(&huge), sizeof(float));
   EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(heavy)), "voxel 6: weight 1e+30 is not within [0, 1e+09]"))
       << sparseMapError(dir, withValidChecksum(heavy));
   std::string far = good;
-  far.replace(64 + 12 + 8 * 7, sizeof(float), reinterpret_cast<const char*>(&huge), sizeof(float));
+  far.replace(kFirstBlock + 12 + 8 * 7, sizeof(float), reinterpret_cast<const char*>(&huge), sizeof(float));
   EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(far)), "voxel 7: distance 1e+30 m is not within [-10, 0.08] m"))
       << sparseMapError(dir, withValidChecksum(far));
   std::string huge_count = good;
@@ -277,7 +281,8 @@ TEST(Io, CorruptSparseMapsAreRefusedSayingWhatIsWrong) {
   EXPECT_TRUE(has(sparseMapError(dir, huge_count), "lists 1099511627776 blocks"));
   const uint64_t absurd_count = 1ull << 62;  // count x block size wraps in 64 bits
   huge_count.replace(56, sizeof(absurd_count), reinterpret_cast<const char*>(&absurd_count), sizeof(absurd_count));
-  EXPECT_TRUE(has(sparseMapError(dir, huge_count), "lists 4611686018427387904 blocks (more than 2^64 bytes after"))
+  EXPECT_TRUE(has(sparseMapError(dir, huge_count), "lists 4611686018427387904 blocks and 0 keyframes (more than 2^62 "
+                                                   "bytes after"))
       << sparseMapError(dir, huge_count);
   EXPECT_THROW(io::readMap(dir + "/good.map"), std::runtime_error) << "unknown extension";
   EXPECT_THROW(io::writeMap(dir + "/out.bin", patternedSparseMap()), std::runtime_error) << "unknown extension";
@@ -293,7 +298,7 @@ TEST(Io, ASparseMapBeyondTheMapsReachIsRefusedEvenWithAValidChecksum) {
   };
   std::string lowest_index = good;
   const int32_t int_min = std::numeric_limits<int32_t>::min();
-  lowest_index.replace(64, sizeof(int_min), reinterpret_cast<const char*>(&int_min), sizeof(int_min));
+  lowest_index.replace(kFirstBlock, sizeof(int_min), reinterpret_cast<const char*>(&int_min), sizeof(int_min));
   EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(lowest_index)), "lies beyond the map's reach"))
       << sparseMapError(dir, withValidChecksum(lowest_index));
   std::string far_origin = good;
@@ -301,6 +306,70 @@ TEST(Io, ASparseMapBeyondTheMapsReachIsRefusedEvenWithAValidChecksum) {
   far_origin.replace(32, sizeof(far), reinterpret_cast<const char*>(&far), sizeof(far));
   EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(far_origin)), "invalid map geometry: origin_W.x"))
       << sparseMapError(dir, withValidChecksum(far_origin));
+}
+
+/// A place memory of three keyframes with codes of every fern value.
+PlaceMemory patternedPlaces() {
+  PlaceMemoryConfig config;
+  config.descriptor.fern_count = 20;
+  config.descriptor.seed = 7;
+  PlaceMemory places(config);
+  for (int k = 0; k < 3; ++k) {
+    Keyframe keyframe;
+    keyframe.T_W_C = test::perturbed(Eigen::Isometry3d::Identity(), 0.3 * k, 0.2 * k);
+    for (int f = 0; f < 20; ++f) keyframe.code.push_back(static_cast<uint8_t>((f + k) % 16));
+    places.add(keyframe);
+  }
+  return places;
+}
+
+TEST(Io, TheMapFileKeepsThePlaceMemoryAndAFirstVersionFileStillLoads) {
+  const std::string dir = test::scratchDirectory("sdfmap_places");
+  const PlaceMemory places = patternedPlaces();
+  io::writeMap(dir + "/map.sdfmap", patternedSparseMap(), &places);
+  std::unique_ptr<PlaceMemory> loaded;
+  PlaceMemoryConfig settings;
+  settings.max_keyframes = 2;  // the file's keyframes are all kept all the same
+  const std::unique_ptr<TsdfMap> map = io::readMap(dir + "/map.sdfmap", false, &loaded, settings);
+  ASSERT_TRUE(loaded);
+  EXPECT_EQ(loaded->config().descriptor, places.config().descriptor) << "the file's descriptor, not the settings'";
+  ASSERT_EQ(loaded->keyframes().size(), 3u);
+  for (size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(loaded->keyframes()[k].code, places.keyframes()[k].code);
+    EXPECT_TRUE(loaded->keyframes()[k].T_W_C.isApprox(places.keyframes()[k].T_W_C, 1e-12));
+  }
+  EXPECT_EQ(static_cast<const SparseTsdfMap&>(*map).blockIndices(), patternedSparseMap().blockIndices());
+
+  // Version 1: the same blocks without the place memory's header or keyframes.
+  const std::string v2 = readBytes(dir + "/map.sdfmap");
+  const size_t keyframes = 3 * (56 + 20);
+  std::string v1 = v2.substr(0, 64) + v2.substr(kFirstBlock, v2.size() - kFirstBlock - keyframes);
+  v1[8] = 1;
+  writeFile(dir + "/v1.sdfmap", withValidChecksum(v1));
+  const std::unique_ptr<TsdfMap> old = io::readMap(dir + "/v1.sdfmap", false, &loaded);
+  EXPECT_FALSE(loaded) << "a version 1 file has no place memory";
+  EXPECT_EQ(static_cast<const SparseTsdfMap&>(*old).blockIndices(), patternedSparseMap().blockIndices());
+
+  // Keyframes no writer makes are refused by name, even with a valid checksum.
+  auto has = [](const std::string& message, const std::string& part) {
+    return message.find(part) != std::string::npos;
+  };
+  const size_t first_keyframe = v2.size() - 8 - keyframes;
+  std::string skewed = v2;
+  const double two = 2.0;
+  skewed.replace(first_keyframe + 24, sizeof(two), reinterpret_cast<const char*>(&two), sizeof(two));
+  EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(skewed)), "keyframe 0: orientation of norm"))
+      << sparseMapError(dir, withValidChecksum(skewed));
+  std::string wide_code = v2;
+  wide_code[first_keyframe + 56 + 3] = static_cast<char>(0x30);
+  EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(wide_code)), "keyframe 0: fern 3 has code 48, beyond its 4 bits"))
+      << sparseMapError(dir, withValidChecksum(wide_code));
+  std::string no_ferns = v2;
+  const int32_t zero = 0;
+  no_ferns.replace(64 + 16, sizeof(zero), reinterpret_cast<const char*>(&zero), sizeof(zero));
+  EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(no_ferns)), "invalid place descriptor: fern_count"))
+      << sparseMapError(dir, withValidChecksum(no_ferns));
+  EXPECT_TRUE(has(sparseMapError(dir, v2.substr(0, v2.size() - 30)), "3 keyframes"));
 }
 
 TEST(Io, AFifoOrAFolderGivenAsAFileIsRefusedWithoutBlocking) {

@@ -4,6 +4,8 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "sdf_tracker/io/trajectory_file.h"
 
 /// Trajectory error metrics as defined by the TUM RGB-D benchmark (Sturm et al., IROS 2012).
@@ -47,5 +49,22 @@ struct RpeResult {
 /// Empty stats (count 0) when the trajectory is shorter than the window.
 RpeResult computeRpe(const std::vector<io::StampedPose>& estimate, const std::vector<io::StampedPose>& ground_truth,
                      double window_s = 1.0, double max_difference_s = 0.02);
+
+/// How well an estimate that lives in a given frame (a map's) localises the camera there: the
+/// ground truth is brought into that frame by the rigid alignment of `reference`'s poses onto it
+/// (positions and orientations; `reference` is a trajectory in the same frame, the session that
+/// built the map), and the estimate is compared with it pose by pose, not aligned itself.
+struct LocalisationResult {
+  std::vector<double> timestamps_s;
+  std::vector<double> translation_errors_m;
+  std::vector<double> rotation_errors_rad;
+  Eigen::Isometry3d T_frame_gt = Eigen::Isometry3d::Identity();  ///< ground truth into the frame
+  /// Poses within both bounds.
+  size_t within(double translation_m, double rotation_rad) const;
+};
+/// Throws std::invalid_argument when fewer than 3 reference poses associate.
+LocalisationResult computeLocalisation(const std::vector<io::StampedPose>& estimate,
+                                       const std::vector<io::StampedPose>& ground_truth,
+                                       const std::vector<io::StampedPose>& reference, double max_difference_s = 0.02);
 
 }  // namespace sdf_tracker::evaluation

@@ -14,6 +14,8 @@
 #include "sdf_tracker/fusion/integrator.h"
 #include "sdf_tracker/map/block_swap.h"
 #include "sdf_tracker/map/tsdf_map.h"
+#include "sdf_tracker/places/place_memory.h"
+#include "sdf_tracker/relocalisation/relocaliser.h"
 #include "sdf_tracker/surface/raycaster.h"
 #include "sdf_tracker/tracking/motion_model.h"
 #include "sdf_tracker/tracking/tracker.h"
@@ -52,8 +54,26 @@ struct PipelineConfig {
   double max_map_memory_mb = 0.0;
   /// Where the swap file is made; empty: the system's temporary directory.
   std::string swap_directory;
+  /// Find the camera in the whole map when tracking from the held pose fails (and at the first
+  /// frames in a loaded map): candidates from the place memory, verified and confirmed by the
+  /// relocaliser before anything is fused; the place memory is built as the map grows. Off: only
+  /// the held pose is tried (the paper), and no place memory is built.
+  bool relocalise = false;
+  PlaceMemoryConfig places;
+  RelocaliserConfig relocaliser;
 
   std::vector<std::string> validate() const;
+};
+
+/// A frame that went to the relocaliser (FrameReport::relocalisation).
+struct RelocalisationReport {
+  bool searched = false;  ///< the frame was searched with (the camera's pose was not known)
+  Relocaliser::Outcome outcome = Relocaliser::Outcome::kNotFound;
+  int candidates_tried = 0;  ///< on this frame
+  int frames_spent = 0;      ///< by the search so far, this frame included
+  int confirmed = 0;         ///< frames the kept candidate has tracked in a row
+  double search_ms = 0.0;
+  std::string message;  ///< why nothing was kept, or why no search could run
 };
 
 /// What happened to one frame.
@@ -76,6 +96,8 @@ struct FrameReport {
   /// The swap file failed (e.g. the disk is full): what and where. Blocks that could not be
   /// written stay in memory; blocks that could not be read back stay in the file.
   std::string swap_error;
+  RelocalisationReport relocalisation;
+  bool added_keyframe = false;  ///< the frame joined the place memory
 };
 
 /// The on-line loop: track each frame against the map, then fuse it at the tracked pose. Owns the
@@ -121,11 +143,24 @@ class SdfPipeline {
   /// Frames in a row that could not be tracked (0 while tracking works).
   int consecutiveFailures() const { return consecutive_failures_; }
 
-  /// Clears the map and puts the camera back at the start pose.
+  /// Clears the map and the place memory and puts the camera back at the start pose.
   void reset();
-  /// Replaces the map (e.g. a loaded .vti) with one of any type; the next frame is tracked against
-  /// it from the start pose.
-  void setMap(std::unique_ptr<TsdfMap> map);
+  /// Replaces the map (e.g. a loaded .vti) with one of any type, and the place memory with
+  /// `places` (none: an empty one). With relocalise on, the camera's place in it is then searched
+  /// for, from the start pose first (see relocalise()); off, the next frame is tracked from the
+  /// start pose.
+  void setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemory> places = nullptr);
+
+  /// Forgets where the camera is: the next frames search the map for it (needs relocalise on),
+  /// trying `guess` first when given (a pose the user knows), and fuse nothing until a candidate
+  /// is confirmed. A guess is verified like any candidate. Throws std::logic_error with
+  /// relocalise off or before the map holds anything.
+  void relocalise(const std::optional<Eigen::Isometry3d>& guess = std::nullopt);
+  /// The camera's pose is being searched for (after a loss with relocalise on, in a loaded map,
+  /// after relocalise()).
+  bool relocalising() const { return pose_unknown_ || relocaliser_->searching(); }
+  /// The keyframes the map was built from.
+  const PlaceMemory& places() const { return *places_; }
 
   /// Live-changeable settings (dynamic reconfigure): everything but the grid geometry. Throws
   /// std::invalid_argument (leaving the pipeline unchanged) when the candidate is invalid or
@@ -153,6 +188,9 @@ class SdfPipeline {
   /// Empties the map and its swap file; the next frame starts a new map. The pose is left to the
   /// caller.
   void clearMap();
+  /// The relocaliser's step on a frame whose pose is not known; fills report->relocalisation and,
+  /// once a candidate is accepted, report->track and the pose. Returns whether it was accepted.
+  bool search(const DepthImage& filtered, const PinholeCamera& camera, FrameReport* report);
 
   PipelineConfig config_;
   std::unique_ptr<TsdfMap> map_;
@@ -168,6 +206,15 @@ class SdfPipeline {
   int consecutive_failures_ = 0;
   /// The last tracked poses, for the prediction; cleared by a failed frame.
   MotionModel motion_;
+  std::unique_ptr<PlaceMemory> places_;
+  std::unique_ptr<Relocaliser> relocaliser_;
+  /// The pose is not known at all (loaded map, relocalise()): every frame goes to the search, which
+  /// tries search_guess_ first, until a candidate is accepted; tracking from the held pose alone
+  /// does not end it (as it ends a search after a loss).
+  bool pose_unknown_ = false;
+  std::optional<Eigen::Isometry3d> search_guess_;
+  /// The poses the current search tries first on every frame.
+  std::vector<Eigen::Isometry3d> search_guesses_;
 };
 
 }  // namespace sdf_tracker

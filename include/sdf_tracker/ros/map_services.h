@@ -16,6 +16,10 @@
 
 namespace sdf_tracker_ros {
 
+/// What a loaded map brings for finding the camera in it, said after "tracking against FILE":
+/// its keyframes, or that it has none, and whether the camera is searched for (Relocalise).
+std::string describePlaces(size_t keyframes, bool relocalise);
+
 /// The node's services (~reset, ~save_mesh, ~save_volume, ~save_volume_region, ~load_volume) and
 /// its files written at shut-down (trajectory, mesh, cloud, OutputTriangles, OutputVolume). Saving
 /// copies the map under the lock and extracts from the copy, so tracking waits only for the copy.
@@ -41,7 +45,10 @@ class MapServices {
   template <typename Response>
   static bool answer(Response& res, const std::function<std::string()>& action);
   /// A copy of the map and the trajectory so far, taken under the lock.
-  std::unique_ptr<sdf_tracker::TsdfMap> copyMap(std::vector<sdf_tracker::io::StampedPose>* trajectory);
+  /// A copy of the whole map, and (when asked) of the trajectory and the place memory, taken
+  /// under the lock.
+  std::unique_ptr<sdf_tracker::TsdfMap> copyMap(std::vector<sdf_tracker::io::StampedPose>* trajectory,
+                                                sdf_tracker::PlaceMemory* places = nullptr);
   void writeTrajectory(const std::vector<sdf_tracker::io::StampedPose>& trajectory) const;
   std::string outputPath(const std::string& requested, const std::string& default_name) const;
 

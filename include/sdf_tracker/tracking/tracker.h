@@ -71,6 +71,8 @@ enum class TrackStatus {
   kDiverged,      ///< the solution ran away or became non-finite.
   kBadInput,      ///< the depth image is empty, of the wrong size, or holds no measurement.
   kLowOverlap,    ///< at the estimate, too few of the image's points lie near mapped surfaces.
+  kRelocalising,  ///< set by the pipeline, never the tracker: the camera's pose is not known and
+                  ///< the map is being searched for it (nothing is fused meanwhile).
 };
 
 const char* toString(TrackStatus status);

@@ -1,0 +1,108 @@
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "sdf_tracker/camera/camera.h"
+#include "sdf_tracker/camera/depth_image.h"
+#include "sdf_tracker/map/tsdf_map.h"
+#include "sdf_tracker/map/tsdf_volume.h"
+#include "sdf_tracker/places/place_memory.h"
+#include "sdf_tracker/tracking/tracker.h"
+
+namespace sdf_tracker {
+
+struct RelocaliserConfig {
+  /// The wide-basin field candidates are first aligned with (buildCoarseField).
+  double coarse_cell_m = 0.08;
+  double coarse_reach_m = 0.6;
+  /// Keyframes tried per frame: the most alike, and the others in turn by likeness; keyframes
+  /// whose codes differ from the frame's in more than max_dissimilarity of the ferns are not tried.
+  int candidates_per_frame = 3;
+  double max_dissimilarity = 0.95;
+  /// What a candidate must show, refined against the map, to be kept: the tracker's kOk (all six
+  /// directions constrained, converged) and at least this overlap with mapped surfaces (on the
+  /// revisits of redkitchen, right candidates show 0.94-0.99, one 0.3 m off along a cupboard
+  /// front 0.76-0.80).
+  double min_overlap = 0.85;
+  /// Frames in a row a kept candidate must go on tracking (from its own estimate, nothing fused)
+  /// before it is accepted; 1 accepts on the frame that found it.
+  int confirm_frames = 3;
+
+  std::vector<std::string> validate() const;
+};
+
+/// Finds the camera in a map when the tracker does not know where it is (after a loss, or at the
+/// first frame of a session in a loaded map). Each frame it tries a few starting poses (given
+/// ones, then the place memory's most alike keyframes): aligned with the map's wide-basin field,
+/// then refined by the tracker against the map (its coarsest level, then the best candidate with
+/// the full schedule); a candidate that fits is then followed over
+/// confirm_frames frames before it is accepted. It never writes into the map: fusing is the
+/// caller's, after acceptance. Not thread safe.
+class Relocaliser {
+ public:
+  /// `tracker` is the configuration the refinement and confirmation track with (the pipeline's).
+  /// Throws std::invalid_argument naming every violation of either config.
+  Relocaliser(const RelocaliserConfig& config, const TrackerConfig& tracker);
+
+  const RelocaliserConfig& config() const { return config_; }
+
+  /// Starts a search in `map` (its wide-basin field is built here, once per search): forgets any
+  /// candidate. Throws std::invalid_argument when the map holds no surface.
+  void begin(const TsdfMap& map);
+  bool searching() const { return searching_; }
+  /// Ends a search without a result (the map was replaced or cleared).
+  void cancel();
+
+  enum class Outcome {
+    kNotFound,    ///< no candidate fits this frame
+    kConfirming,  ///< a candidate fits and is being followed (confirmations so far in `confirmed`)
+    kAccepted,    ///< a candidate was followed over confirm_frames frames: T_W_C is the pose
+  };
+  struct Step {
+    Outcome outcome = Outcome::kNotFound;
+    Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();  ///< the candidate's pose (kConfirming, kAccepted)
+    TrackResult track;                                        ///< the frame tracked from the candidate
+    int candidates_tried = 0;                                 ///< this frame
+    int confirmed = 0;
+    std::string message;  ///< what was tried and why nothing was kept, in words
+  };
+  /// One frame of the search (depth as the tracker takes it, ideal camera). `guesses` are tried
+  /// before the keyframes (a pose the user gave, the last known one). `map` must be the one
+  /// begin() was given, unchanged.
+  Step step(const DepthImage& depth, const PinholeCamera& camera, const TsdfMap& map, const PlaceMemory& places,
+            const std::vector<Eigen::Isometry3d>& guesses);
+
+  /// Frames and candidates the current (or last) search has spent.
+  int framesSpent() const { return frames_spent_; }
+  int candidatesTried() const { return candidates_tried_; }
+
+  /// The tracker configuration of the wide-basin alignment: the pipeline's with a schedule on
+  /// the coarse lattice, a Huber threshold of its scale and the reach as the motion limit.
+  static TrackerConfig coarseTrackerConfig(const TrackerConfig& tracker, const RelocaliserConfig& config);
+
+ private:
+  /// Whether a refined track fits well enough to keep its candidate.
+  bool fits(const TrackResult& track) const;
+
+  RelocaliserConfig config_;
+  Tracker coarse_tracker_;
+  Tracker screening_tracker_;
+  Tracker tracker_;
+  std::unique_ptr<TsdfVolume> coarse_field_;
+  bool searching_ = false;
+  std::optional<Eigen::Isometry3d> candidate_;
+  int confirmed_ = 0;
+  int frames_spent_ = 0;
+  int candidates_tried_ = 0;
+  /// Where the keyframes after the most alike one take up their turns (see step()).
+  size_t next_rank_ = 0;
+};
+
+const char* toString(Relocaliser::Outcome outcome);
+
+}  // namespace sdf_tracker

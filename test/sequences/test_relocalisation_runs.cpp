@@ -1,0 +1,109 @@
+// Finding the camera again in whole runs of the pipeline: after a kidnap, and in a second session
+// in a saved map (found by itself, or told where it is).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "sdf_tracker/io/map_file.h"
+#include "sdf_tracker/pipeline/parameters.h"
+#include "sdf_tracker/pipeline/pipeline.h"
+#include "sdf_tracker/sim/synthetic.h"
+#include "test_helpers.h"
+
+namespace sdf_tracker {
+namespace {
+
+/// Frames of the loop around the desk (12 s per lap) at 15 Hz, from t0_s to t1_s.
+std::vector<double> loopTimes(double t0_s, double t1_s) {
+  std::vector<double> times;
+  for (double t = t0_s; t < t1_s; t += 1.0 / 15.0) times.push_back(t);
+  return times;
+}
+Eigen::Isometry3d loopPose(double t_s) { return synthetic::cameraPose(synthetic::Motion::kLoop, t_s, 12.0); }
+DepthImage loopView(double t_s) {
+  synthetic::NoiseModel no_noise;
+  no_noise.enabled = false;
+  return synthetic::Scene::forMotion(synthetic::Motion::kLoop).render(test::testCamera(), loopPose(t_s), no_noise, 0);
+}
+
+/// After a kidnap or in a second session: the frames until the camera is found, each fused frame's
+/// error, and the error of the frames after it was found.
+struct Recovery {
+  int frames_until_found = -1;
+  double worst_fused_error_m = 0.0;
+  double worst_error_after_m = 0.0;
+};
+Recovery recover(SdfPipeline* pipeline, const std::vector<double>& times, const Eigen::Isometry3d& T_map_world) {
+  Recovery r;
+  for (size_t n = 0; n < times.size(); ++n) {
+    const FrameReport report = pipeline->processFrame(loopView(times[n]), test::testCamera(), times[n]);
+    const double error = (pipeline->pose().translation() - (T_map_world * loopPose(times[n])).translation()).norm();
+    if (report.fused) r.worst_fused_error_m = std::max(r.worst_fused_error_m, error);
+    if (r.frames_until_found < 0 && report.track.tracked()) r.frames_until_found = static_cast<int>(n);
+    if (r.frames_until_found >= 0) r.worst_error_after_m = std::max(r.worst_error_after_m, error);
+    EXPECT_TRUE(report.fused || !report.track.tracked() || report.track.status == TrackStatus::kDegenerate);
+    if (r.frames_until_found < 0) {
+      EXPECT_EQ(report.track.status, TrackStatus::kRelocalising) << "frame " << n << ": " << report.track.message;
+      EXPECT_FALSE(report.fused);
+    }
+  }
+  return r;
+}
+
+TEST(PipelineRelocalisation, AKidnappedCameraIsFoundAgainAndNothingIsFusedBeforeItIs) {
+  SdfPipeline pipeline(preset("default").pipeline);
+  ASSERT_TRUE(pipeline.config().relocalise);
+  for (double t : loopTimes(0.0, 4.0)) pipeline.processFrame(loopView(t), test::testCamera(), t);
+  ASSERT_EQ(pipeline.consecutiveFailures(), 0);
+  const Eigen::Isometry3d T_map_world = pipeline.pose() * loopPose(4.0 - 1.0 / 15.0).inverse();
+  // Carried round the desk out of view: it comes back 150 degrees round the loop from where the
+  // tracker last saw it, looking at the desk from near where the first lap began.
+  const Recovery r = recover(&pipeline, loopTimes(11.0, 13.0), T_map_world);
+  ASSERT_GE(r.frames_until_found, 0) << "never found";
+  EXPECT_LE(r.frames_until_found, 12);
+  EXPECT_LT(r.worst_fused_error_m, 0.02);
+  EXPECT_LT(r.worst_error_after_m, 0.02);
+}
+
+TEST(PipelineRelocalisation, ASecondSessionInASavedMapFindsItsPlaceOrIsToldIt) {
+  const std::string path = test::scratchDirectory("second_session") + "/map.sdfmap";
+  Eigen::Isometry3d T_map_world;
+  {
+    SdfPipeline first(preset("default").pipeline);
+    for (double t : loopTimes(0.0, 4.0)) first.processFrame(loopView(t), test::testCamera(), t);
+    T_map_world = first.pose() * loopPose(4.0 - 1.0 / 15.0).inverse();
+    io::writeMap(path, first.map(), &first.places());
+  }
+  auto session = [&](const std::optional<Eigen::Isometry3d>& told, double t0) {
+    auto pipeline = std::make_unique<SdfPipeline>(preset("default").pipeline);
+    std::unique_ptr<PlaceMemory> places;
+    std::unique_ptr<TsdfMap> map = io::readMap(path, false, &places);  // before places is handed on
+    pipeline->setMap(std::move(map), std::move(places));
+    EXPECT_FALSE(pipeline->places().empty());
+    EXPECT_TRUE(pipeline->relocalising()) << "a loaded map does not say where the camera is";
+    if (told) pipeline->relocalise(*told);
+    return std::make_pair(std::move(pipeline), t0);
+  };
+  {
+    auto [pipeline, t0] = session(std::nullopt, 1.5);
+    const Recovery r = recover(pipeline.get(), loopTimes(t0, t0 + 1.5), T_map_world);
+    ASSERT_GE(r.frames_until_found, 0) << "never found";
+    EXPECT_LE(r.frames_until_found, 12);
+    EXPECT_LT(r.worst_fused_error_m, 0.02);
+  }
+  {
+    // Told where it is, a little off: verified, then found at once.
+    auto [pipeline, t0] = session(test::perturbed(T_map_world * loopPose(2.5), 0.1, 0.1), 2.5);
+    const Recovery r = recover(pipeline.get(), loopTimes(t0, t0 + 0.5), T_map_world);
+    EXPECT_EQ(r.frames_until_found, pipeline->config().relocaliser.confirm_frames - 1);
+    EXPECT_LT(r.worst_fused_error_m, 0.02);
+  }
+  SdfPipeline off(preset("paper").pipeline);
+  EXPECT_THROW(off.relocalise(), std::logic_error) << "the paper's preset has no relocaliser";
+}
+
+}  // namespace
+}  // namespace sdf_tracker
