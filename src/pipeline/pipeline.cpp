@@ -247,7 +247,7 @@ bool SdfPipeline::search(const DepthImage& filtered, const PinholeCamera& camera
     return true;
   }
   std::ostringstream s;
-  s << "relocalising: " << r.frames_spent << (r.frames_spent == 1 ? " frame, " : " frames, ")
+  s << r.frames_spent << (r.frames_spent == 1 ? " frame, " : " frames, ")
     << relocaliser_->candidatesTried() << " candidates tried";
   if (step.outcome == Relocaliser::Outcome::kConfirming) {
     s << "; a candidate fits, confirmed on " << step.confirmed << " of " << relocaliser_->config().confirm_frames

@@ -48,7 +48,17 @@ TEST_F(NodeTest, AMapSavedBySaveVolumeIsTrackedInAfterLoadVolume) {
   load.request.path = save.request.path;
   ASSERT_TRUE(callService("sdf_tracker/load_volume", load));
   ASSERT_TRUE(load.response.success) << load.response.message;
-  const auto in_loaded = publishDeskFrame(510.0, 1 / 30.0);
+  // Where the camera is in the loaded map is not known: the first frames search for it (the map's
+  // start pose first) and fuse nothing; the frame that confirms the fit is tracked in the map.
+  sdf_tracker::TrackingStatus in_loaded;
+  int searching = 0;
+  for (int i = 0; i < 6; ++i) {
+    in_loaded = publishDeskFrame(510.0 + i / 30.0, 1 / 30.0);
+    if (in_loaded.status != sdf_tracker::TrackingStatus::RELOCALISING) break;
+    ++searching;
+    EXPECT_FALSE(in_loaded.fused) << in_loaded.status_text;
+  }
+  EXPECT_EQ(searching, 2) << "confirmed on the third frame";
   EXPECT_EQ(in_loaded.status, sdf_tracker::TrackingStatus::OK) << in_loaded.status_text;
   EXPECT_EQ(in_loaded.status_text.find("first frame"), std::string::npos)
       << "the frame is tracked in the loaded map, not used to start a new one: " << in_loaded.status_text;
@@ -157,6 +167,12 @@ TEST_F(NodeTest, MeshBlocksSendsANewViewerEverythingAndThenOnlyTheChunksThatChan
       }
     }
     patch = sdf_tracker_ros::toImageMsg(depth, patch.header);
+  }
+  // The loaded map is searched for the camera first: two whole frames from where the patch is
+  // taken fuse nothing, and the patch, the third, confirms the place and is fused.
+  for (int i = 0; i < 2; ++i) {
+    const auto searching = publishAndWait(deskFrame(709.9 + i / 30.0, 3 / 30.0), kQvga);
+    EXPECT_EQ(searching.status, sdf_tracker::TrackingStatus::RELOCALISING) << searching.status_text;
   }
   const auto patch_status = publishAndWait(patch, kQvga);
   EXPECT_EQ(patch_status.status, sdf_tracker::TrackingStatus::OK) << patch_status.status_text;
