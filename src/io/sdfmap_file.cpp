@@ -68,6 +68,24 @@ static_assert(sizeof(MapFileHeader) == 64 && sizeof(PlacesHeader) == 48 && sizeo
                   sizeof(Voxel) == 8,
               "the .sdfmap layout is fixed");
 
+/// The place memory's header for `keyframes` keyframes of `descriptor`, and the descriptor a
+/// header states: the one mapping between the file's fields and the config's.
+PlacesHeader placesHeaderOf(const PlaceDescriptorConfig& descriptor, uint64_t keyframes) {
+  return {keyframes,          descriptor.grid_width, descriptor.grid_height,      descriptor.fern_count,
+          descriptor.tests_per_fern, descriptor.seed, descriptor.min_test_depth_m, descriptor.max_test_depth_m};
+}
+PlaceDescriptorConfig descriptorOf(const PlacesHeader& header) {
+  PlaceDescriptorConfig descriptor;
+  descriptor.grid_width = header.grid_width;
+  descriptor.grid_height = header.grid_height;
+  descriptor.fern_count = header.fern_count;
+  descriptor.tests_per_fern = header.tests_per_fern;
+  descriptor.seed = header.seed;
+  descriptor.min_test_depth_m = header.min_test_depth_m;
+  descriptor.max_test_depth_m = header.max_test_depth_m;
+  return descriptor;
+}
+
 /// Why a saved keyframe cannot be one ("" when it can).
 std::string keyframeProblem(const KeyframePose& pose, const uint8_t* code, const PlaceDescriptorConfig& descriptor) {
   for (double x : pose.position) {
@@ -97,16 +115,8 @@ void writeSparseMap(const std::string& path, const SparseTsdfMap& map, const Pla
   for (int axis = 0; axis < 3; ++axis) header.origin_W[axis] = map.config().origin_W[axis];
   const std::vector<SparseTsdfMap::BlockIndex> indices = map.blockIndices();
   header.block_count = indices.size();
-  const PlaceDescriptorConfig descriptor = places ? places->config().descriptor : PlaceDescriptorConfig();
-  PlacesHeader places_header;
-  places_header.keyframe_count = places ? places->keyframes().size() : 0;
-  places_header.grid_width = descriptor.grid_width;
-  places_header.grid_height = descriptor.grid_height;
-  places_header.fern_count = descriptor.fern_count;
-  places_header.tests_per_fern = descriptor.tests_per_fern;
-  places_header.seed = descriptor.seed;
-  places_header.min_test_depth_m = descriptor.min_test_depth_m;
-  places_header.max_test_depth_m = descriptor.max_test_depth_m;
+  const PlacesHeader places_header = placesHeaderOf(places ? places->config().descriptor : PlaceDescriptorConfig(),
+                                                   places ? places->keyframes().size() : 0);
 
   AtomicOutput out(path);
   Fnv1a hash;
@@ -176,13 +186,7 @@ SparseTsdfMap readSparseMap(const std::string& path, std::optional<SavedPlaces>*
       throwFileError(path, "truncated in the place memory's header");
     }
     hash.add(&places_header, sizeof(places_header));
-    descriptor.grid_width = places_header.grid_width;
-    descriptor.grid_height = places_header.grid_height;
-    descriptor.fern_count = places_header.fern_count;
-    descriptor.tests_per_fern = places_header.tests_per_fern;
-    descriptor.seed = places_header.seed;
-    descriptor.min_test_depth_m = places_header.min_test_depth_m;
-    descriptor.max_test_depth_m = places_header.max_test_depth_m;
+    descriptor = descriptorOf(places_header);
     if (const auto violations = descriptor.validate(); !violations.empty()) {
       throwFileError(path, "invalid place descriptor: " + violations.front());
     }

@@ -323,7 +323,7 @@ std::vector<ParameterSpec> buildTable() {
                           "when tracking from the held pose fails, and in a loaded map: search the whole map for the "
                           "camera, fusing nothing until a candidate is confirmed (off: the held pose only)",
                           {}, {true, false, false}, kLive, kAll, [](auto& s) -> auto& { return s.pipeline.relocalise; }));
-  t.push_back(bound<int>("RelocaliseCandidates", "", "keyframes a relocalising frame tries (each ~10-30 ms)",
+  t.push_back(bound<int>("RelocaliseCandidates", "", "keyframes a relocalising frame tries besides the held pose",
                          closed(0, 1000), same(3), kLive, kAll,
                          [](auto& s) -> auto& { return s.pipeline.relocaliser.candidates_per_frame; }));
   t.push_back(bound<int>("RelocaliseConfirmFrames", "frames",

@@ -358,7 +358,7 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     consecutive_failures_ = 0;
   }
   motion_.addTracked(timestamp_s, T_W_C_);
-  if (config_.relocalise) report.added_keyframe = places_->offer(filtered, T_W_C_);
+  if (config_.relocalise) places_->offer(filtered, T_W_C_);
 
   const Eigen::Isometry3d motion = T_W_C_last_fused_.inverse() * T_W_C_;
   const double change = std::hypot(motion.translation().norm(), rotationAngle(motion));

@@ -97,7 +97,6 @@ struct FrameReport {
   /// written stay in memory; blocks that could not be read back stay in the file.
   std::string swap_error;
   RelocalisationReport relocalisation;
-  bool added_keyframe = false;  ///< the frame joined the place memory
 };
 
 /// The on-line loop: track each frame against the map, then fuse it at the tracked pose. Owns the
