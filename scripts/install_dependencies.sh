@@ -4,7 +4,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake catkin ros-base-dev
+  build-essential cmake ninja-build catkin ros-base-dev
   libeigen3-dev libopencv-dev libgtest-dev
   libpcl-dev libpcl-conversions-dev libtf2-ros-dev libtf2-eigen-dev libcv-bridge-dev libimage-transport-dev
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure python3-rostest librostest-dev

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The core's unit tests (test_core: test/unit/) and the tools' tests (test_tools: test/tools/),
 # built and run here only, under AddressSanitizer + UndefinedBehaviorSanitizer, and every
-# reader's fuzz target for FUZZ_SECONDS (default 30) from its committed corpus (test/fuzz/corpus/). Whole sequences (test/sequences/) and the ROS tests run in the
+# reader's fuzz target for FUZZ_SECONDS (default 20) from its committed corpus (test/fuzz/corpus/). Whole sequences (test/sequences/) and the ROS tests run in the
 # release build (scripts/run_tests.sh). Builds in build/sanitize (plain CMake, no ROS). Results go
 # to RESULTS_DIR (default build/sanitize/results) as JUnit XML, which run_tests.sh counts.
 #   scripts/run_sanitizers.sh
@@ -9,7 +9,11 @@ set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="$repo/build/sanitize"
 results="${RESULTS_DIR:-$build/results}"
-seconds="${FUZZ_SECONDS:-30}"
+seconds="${FUZZ_SECONDS:-20}"
+# Ninja, as the release build (scripts/build.sh); a folder configured by make is configured again.
+if [ -f "$build/CMakeCache.txt" ] && ! grep -q "^CMAKE_GENERATOR:INTERNAL=Ninja$" "$build/CMakeCache.txt"; then
+  rm -rf "$build"
+fi
 mkdir -p "$build" "$results"
 export PATH="/usr/bin:$PATH"
 # Any report is a failure; leaks are checked too.
@@ -23,7 +27,7 @@ junit() {  # junit NAME PASSED(0/1) MESSAGE
     "$1" "$failure" > "$results/$1.xml"
 }
 
-if ! { cmake -S "$repo/test/sanitize" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo > "$build/cmake.log" 2>&1 &&
+if ! { cmake -G Ninja -S "$repo/test/sanitize" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo > "$build/cmake.log" 2>&1 &&
        cmake --build "$build" -j"$(nproc)" --target test_core test_tools fuzz_depth_png fuzz_vti fuzz_sdfmap fuzz_ply \
          fuzz_tum_folder > "$build/build.log" 2>&1; }; then
   tail -n 30 "$build/build.log" 2>/dev/null || tail -n 30 "$build/cmake.log"

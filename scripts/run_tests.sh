@@ -22,8 +22,7 @@ source devel/setup.bash
 set -u
 # One test at a time: the rostests play bags at their real rate and must not share the two cores
 # with another test.
-catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 -j1 run_tests \
-  > "$repo/build/run_tests.log" 2>&1 || true
+cmake --build build --target run_tests -j 1 > "$repo/build/run_tests.log" 2>&1 || true
 # The unit and tools' tests under ASan + UBSan, and every reader's fuzz target (no ROS).
 # Meanwhile (it is light), the package configures from a checkout path of 150 characters or more.
 RESULTS_DIR="$repo/build/ws/build/test_results/build" bash "$repo/scripts/check_deep_checkout.sh" &
