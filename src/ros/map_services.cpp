@@ -52,6 +52,7 @@ MapServices::MapServices(ros::NodeHandle pnh, TrackerState& state, const NodeOpt
     if (!path.empty()) requireWritableFolder(parameter, path);
   }
   reset_srv_ = pnh.advertiseService("reset", &MapServices::reset, this);
+  relocalise_srv_ = pnh.advertiseService("relocalise", &MapServices::relocalise, this);
   save_mesh_srv_ = pnh.advertiseService("save_mesh", &MapServices::saveMesh, this);
   save_volume_srv_ = pnh.advertiseService("save_volume", &MapServices::saveVolume, this);
   save_volume_region_srv_ = pnh.advertiseService("save_volume_region", &MapServices::saveVolumeRegion, this);
@@ -152,6 +153,17 @@ bool MapServices::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
   state_.restarted = true;
   ROS_INFO("sdf_tracker: map and pose reset");
   return true;
+}
+
+bool MapServices::relocalise(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  return answer(res, [&] {
+    std::lock_guard<std::mutex> lock(state_.mutex);
+    state_.pipeline->relocalise();  // throws with Relocalise off or an empty map, saying which
+    const size_t keyframes = state_.pipeline->places().keyframes().size();
+    ROS_INFO("sdf_tracker: ~relocalise: searching the map for the camera");
+    return "searching the map for the camera from the held pose and " + std::to_string(keyframes) +
+           " keyframes; nothing is fused until a place is confirmed (see ~status)";
+  });
 }
 
 bool MapServices::saveMesh(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res) {

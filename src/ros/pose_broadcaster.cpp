@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 
 #include <tf2_eigen/tf2_eigen.h>
@@ -47,6 +48,17 @@ Eigen::Isometry3d gravityAlignedMapFromOpticalWorld(const Eigen::Vector3d& up_W)
   T.linear().row(0) = x.transpose();
   T.linear().row(1) = y.transpose();
   T.linear().row(2) = z.transpose();
+  return T;
+}
+
+Eigen::Isometry3d placedOnPlane(const Eigen::Isometry3d& T_map_body, const Eigen::Vector3d& forward_body,
+                                const Eigen::Vector3d& fallback_body, double x_m, double y_m, double yaw_rad) {
+  Eigen::Vector3d heading = T_map_body.linear() * forward_body;
+  if (heading.head<2>().norm() < 1e-3 * heading.norm()) heading = T_map_body.linear() * fallback_body;
+  const double held_yaw_rad = std::atan2(heading.y(), heading.x());
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(yaw_rad - held_yaw_rad, Eigen::Vector3d::UnitZ()) * T_map_body.linear();
+  T.translation() = Eigen::Vector3d(x_m, y_m, T_map_body.translation().z());
   return T;
 }
 
@@ -103,9 +115,63 @@ bool PoseBroadcaster::mayPublishParentOf(const std::string& child, const std::st
   return true;
 }
 
+std::string PoseBroadcaster::cameraFrameOf(const std::string& image_frame) const {
+  return frames_.camera_frame.empty() ? stripSlash(image_frame) : frames_.camera_frame;
+}
+
+Eigen::Isometry3d PoseBroadcaster::T_base_C(const std::string& camera_frame) {
+  if (frames_.base_frame.empty() || frames_.base_frame == camera_frame) return Eigen::Isometry3d::Identity();
+  return tf2::transformToEigen(tf_buffer_.lookupTransform(frames_.base_frame, camera_frame, ros::Time(0)));
+}
+
+Eigen::Isometry3d PoseBroadcaster::requestedCameraPose(const geometry_msgs::PoseWithCovarianceStamped& request,
+                                                       const std::string& image_frame,
+                                                       const Eigen::Isometry3d& T_W_C_held) {
+  const geometry_msgs::Pose& pose = request.pose.pose;
+  const Eigen::Vector3d position(pose.position.x, pose.position.y, pose.position.z);
+  const Eigen::Vector4d quaternion(pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w);
+  if (!position.allFinite() || !quaternion.allFinite() || quaternion.norm() < 1e-6) {
+    std::ostringstream msg;
+    msg << "its position (" << position.transpose() << ") or orientation (quaternion " << quaternion.transpose()
+        << ") is not a pose";
+    throw std::runtime_error(msg.str());
+  }
+  const std::string frame = request.header.frame_id.empty() ? frames_.map_frame : stripSlash(request.header.frame_id);
+  Eigen::Isometry3d T_map_frame = Eigen::Isometry3d::Identity();
+  if (frame != frames_.map_frame) {
+    try {
+      T_map_frame = tf2::transformToEigen(tf_buffer_.lookupTransform(frames_.map_frame, frame, ros::Time(0)));
+    } catch (const tf2::TransformException& e) {
+      throw std::runtime_error("it is given in the frame '" + frame + "', and tf has no transform from it to ~map_frame '" +
+                               frames_.map_frame + "' (" + e.what() + ")");
+    }
+  }
+  const Eigen::Isometry3d T_map_requested = T_map_frame * fromPoseMsg(pose);
+  const Eigen::Vector3d heading = T_map_requested.linear().col(0);  // the body's x: rviz's arrow
+  const double yaw_rad = std::atan2(heading.y(), heading.x());
+  const std::string camera_frame = cameraFrameOf(image_frame);
+  const bool on_base = !frames_.base_frame.empty() && frames_.base_frame != camera_frame;
+  Eigen::Isometry3d T_base_cam;
+  try {
+    T_base_cam = T_base_C(camera_frame);
+  } catch (const tf2::TransformException& e) {
+    throw std::runtime_error("tf has no " + frames_.base_frame + " -> " + camera_frame +
+                             " (the camera's mounting on ~base_frame): " + e.what());
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  const Eigen::Isometry3d T_map_body_held = T_map_W_ * T_W_C_held * T_base_cam.inverse();
+  // A base heads along its x with z up; a camera along its optical z with -y up.
+  const Eigen::Isometry3d T_map_body =
+      on_base ? placedOnPlane(T_map_body_held, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ(),
+                              T_map_requested.translation().x(), T_map_requested.translation().y(), yaw_rad)
+              : placedOnPlane(T_map_body_held, Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitY(),
+                              T_map_requested.translation().x(), T_map_requested.translation().y(), yaw_rad);
+  return T_map_W_.inverse() * T_map_body * T_base_cam;
+}
+
 Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::string& image_frame,
                                            const Eigen::Isometry3d& T_W_C) {
-  const std::string camera_frame = frames_.camera_frame.empty() ? stripSlash(image_frame) : frames_.camera_frame;
+  const std::string camera_frame = cameraFrameOf(image_frame);
   std::unique_lock<std::mutex> lock(mutex_);
   if (!map_frame_fixed_) {
     if (imu_sub_ && accelerations_.empty() && refused_readings_ > 0) {
@@ -127,7 +193,8 @@ Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::st
                  imu_frame_.c_str(), camera_frame.c_str(), e.what());
       }
       if (T_C_I) {
-        // At the first frame the tracker's world is the camera's optical frame (T_W_C = I).
+        // Up in the tracker's world, through the camera's pose (the identity at a new map's first
+        // frame; where the camera was found in a loaded one).
         Eigen::Vector3d mean_I = Eigen::Vector3d::Zero();
         for (const auto& sample : accelerations_) mean_I += sample.second;
         mean_I /= static_cast<double>(accelerations_.size());
@@ -167,9 +234,7 @@ Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::st
   if (!frames_.base_frame.empty() && frames_.base_frame != camera_frame) {
     base = frames_.base_frame;
     try {
-      const Eigen::Isometry3d T_base_C =
-          tf2::transformToEigen(tf_buffer_.lookupTransform(base, camera_frame, ros::Time(0)));
-      T_map_base = T_map_C * T_base_C.inverse();
+      T_map_base = T_map_C * T_base_C(camera_frame).inverse();
     } catch (const tf2::TransformException& e) {
       ROS_WARN_THROTTLE(kThrottle_s, "sdf_tracker: waiting for tf %s -> %s (the camera's mounting on ~base_frame): %s",
                         base.c_str(), camera_frame.c_str(), e.what());

@@ -97,6 +97,11 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
         last_info_wall_ = ros::WallTime::now();
         last_info_ = info;
       });
+  initial_pose_sub_ = pnh_.subscribe<geometry_msgs::PoseWithCovarianceStamped>(
+      "initialpose", 1, [this](const geometry_msgs::PoseWithCovarianceStampedConstPtr& request) {
+        std::lock_guard<std::mutex> lock(mailbox_mutex_);
+        pending_pose_request_ = *request;
+      });
   watchdog_timer_ = nh_.createTimer(ros::Duration(2.0), &TrackerServer::checkInputs, this);
 
   const auto& v = settings.pipeline.volume;
@@ -234,6 +239,7 @@ void TrackerServer::process(const Frame& frame) {
 
   st::FrameReport report;
   Eigen::Isometry3d T_W_C;
+  bool pose_known = true;
   {
     std::lock_guard<std::mutex> lock(state_.mutex);
     if (state_.restarted) {
@@ -261,12 +267,19 @@ void TrackerServer::process(const Frame& frame) {
         return;
       }
     }
+    std::optional<geometry_msgs::PoseWithCovarianceStamped> pose_request;
+    {
+      std::lock_guard<std::mutex> mailbox_lock(mailbox_mutex_);
+      pose_request.swap(pending_pose_request_);
+    }
+    if (pose_request) applyPoseRequest(*pose_request, image.header.frame_id);
     report = state_.pipeline->processFrame(depth, camera, image.header.stamp.toSec());
     if (report.track.status == st::TrackStatus::kBadInput) {
       return drop(report.track.message);
     }
     last_stamp_ = state_.last_stamp = image.header.stamp;
     T_W_C = state_.pipeline->pose();
+    pose_known = state_.pipeline->poseKnown();
     status.consecutive_failures = static_cast<uint32_t>(state_.pipeline->consecutiveFailures());
   }
 
@@ -313,14 +326,16 @@ void TrackerServer::process(const Frame& frame) {
   status.fused = report.fused;
   status.lost = lost_;
 
-  const Eigen::Isometry3d T_map_C = poses_->publish(image.header.stamp, image.header.frame_id, T_W_C);
-  {
+  // While the camera is searched for in the map, its pose is not known: nothing goes on tf, ~pose,
+  // ~path or the trajectory until a place is confirmed (the status says how the search goes).
+  if (pose_known) {
+    const Eigen::Isometry3d T_map_C = poses_->publish(image.header.stamp, image.header.frame_id, T_W_C);
     std::lock_guard<std::mutex> lock(state_.mutex);
     state_.trajectory.push_back({image.header.stamp.toSec(), T_map_C});
   }
   status_pub_.publish(status);
 
-  if (denoised_pub_.getNumSubscribers() > 0) {
+  if (pose_known && denoised_pub_.getNumSubscribers() > 0) {
     std::lock_guard<std::mutex> lock(state_.mutex);
     const st::RaycastImage cast = st::raycast(state_.pipeline->map(), camera, T_W_C,
                                               state_.pipeline->config().raycast, &depth);
@@ -331,6 +346,28 @@ void TrackerServer::process(const Frame& frame) {
   ROS_INFO_THROTTLE(10.0, "sdf_tracker: %zu frames processed, %u dropped; %.1f ms per frame on average",
                     frame_ms_.size(), status.frames_dropped,
                     std::accumulate(frame_ms_.begin(), frame_ms_.end(), 0.0) / frame_ms_.size());
+}
+
+void TrackerServer::applyPoseRequest(const geometry_msgs::PoseWithCovarianceStamped& request,
+                                     const std::string& image_frame) {
+  const std::string topic = initial_pose_sub_.getTopic();
+  try {
+    if (!state_.pipeline->config().relocalise) {
+      throw std::runtime_error("a given pose is used once the tracker has verified it, which needs Relocalise (false)");
+    }
+    if (request.header.frame_id.empty()) {
+      ROS_WARN("sdf_tracker: the pose on %s has no frame_id: taken in ~map_frame '%s'", topic.c_str(),
+               poses_->mapFrame().c_str());
+    }
+    const Eigen::Isometry3d T_W_C = poses_->requestedCameraPose(request, image_frame, state_.pipeline->pose());
+    state_.pipeline->relocalise(T_W_C);
+    const Eigen::Vector3d t_map = poses_->T_map_W() * T_W_C.translation();
+    ROS_INFO("sdf_tracker: pose from %s: the camera at (%.3f, %.3f, %.3f) m in %s (x, y and yaw given, height and "
+             "tilt kept); verifying it before anything is fused",
+             topic.c_str(), t_map.x(), t_map.y(), t_map.z(), poses_->mapFrame().c_str());
+  } catch (const std::exception& e) {
+    ROS_ERROR("sdf_tracker: ignoring the pose on %s: %s", topic.c_str(), e.what());
+  }
 }
 
 void TrackerServer::checkInputs(const ros::TimerEvent&) {

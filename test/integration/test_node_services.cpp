@@ -250,6 +250,8 @@ TEST_F(NodeTest, EveryLiveParameterIsReconfigurableAndEveryOutOfRangeValueIsRefu
   // The node runs the default preset with a 160^3 grid (node.test).
   st::Settings expected = st::preset("default");
   expected.pipeline.volume.dims = Eigen::Vector3i(160, 160, 160);
+  const st::Settings started_with = expected;
+  std::vector<std::string> changed;
   int live = 0;
   for (const st::ParameterSpec& spec : st::parameterTable()) {
     if (!spec.live) continue;
@@ -270,6 +272,7 @@ TEST_F(NodeTest, EveryLiveParameterIsReconfigurableAndEveryOutOfRangeValueIsRefu
     ASSERT_TRUE(valid.has_value()) << "no valid alternative found to try";
     EXPECT_EQ(reconfigure(spec.name, *valid)[spec.name], *valid) << "valid value " << st::toText(*valid);
     st::setParameter(&expected, spec.name, *valid);
+    changed.push_back(spec.name);
   }
   EXPECT_GT(live, 10);
   // A refused change reports what is in force in the pipeline: every accepted value is there.
@@ -278,6 +281,12 @@ TEST_F(NodeTest, EveryLiveParameterIsReconfigurableAndEveryOutOfRangeValueIsRefu
     if (spec.live) {
       EXPECT_EQ(in_force.at(spec.name), spec.get(expected)) << spec.name;
     }
+  }
+  // Every value back, last changed first (so each step is a state the loop went through): the
+  // tests after this one share the node.
+  for (auto name = changed.rbegin(); name != changed.rend(); ++name) {
+    const st::ParameterValue value = st::findParameter(*name)->get(started_with);
+    EXPECT_EQ(reconfigure(*name, value)[*name], value) << "restoring " << *name;
   }
 }
 

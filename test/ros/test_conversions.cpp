@@ -249,6 +249,45 @@ TEST(Frames, OnlyReadingsThatGravityDominatesCanLevelTheMapFrame) {
   EXPECT_FALSE(isGravityReading(Eigen::Vector3d(0.0, 0.0, std::numeric_limits<double>::infinity())));
 }
 
+TEST(Frames, APlanarPoseRequestSetsPositionAndHeadingAndKeepsHeightAndTilt) {
+  auto rotation = [](double yaw, double pitch, double roll) {
+    return Eigen::Matrix3d(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+                           Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+                           Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()));
+  };
+  auto heading = [](const Eigen::Isometry3d& T, const Eigen::Vector3d& axis) {
+    const Eigen::Vector3d a = T.linear() * axis;
+    return std::atan2(a.y(), a.x());
+  };
+  // A base leaning 15 degrees forward and 10 to the side, 0.8 m up, heading 30 degrees.
+  Eigen::Isometry3d T_map_base = Eigen::Isometry3d::Identity();
+  T_map_base.linear() = rotation(0.5236, -0.2618, 0.1745);
+  T_map_base.translation() = Eigen::Vector3d(-3.0, 4.0, 0.8);
+  const double yaw = -1.0472;
+  const Eigen::Isometry3d placed =
+      placedOnPlane(T_map_base, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ(), 1.0, 2.0, yaw);
+  EXPECT_TRUE(placed.translation().isApprox(Eigen::Vector3d(1.0, 2.0, 0.8))) << placed.translation().transpose();
+  EXPECT_NEAR(heading(placed, Eigen::Vector3d::UnitX()), yaw, 1e-9);
+  // Only turned about the vertical: tilt (where the body's axes point up or down) is kept.
+  const Eigen::Matrix3d turn = placed.linear() * T_map_base.linear().transpose();
+  EXPECT_TRUE((turn * Eigen::Vector3d::UnitZ()).isApprox(Eigen::Vector3d::UnitZ(), 1e-12));
+  for (int axis = 0; axis < 3; ++axis) {
+    EXPECT_NEAR(placed.linear()(2, axis), T_map_base.linear()(2, axis), 1e-12) << "axis " << axis;
+  }
+
+  // A camera heads along its optical z; looking straight down, along its image-up axis (-y).
+  Eigen::Isometry3d T_map_C = mapFromOpticalWorld();
+  const Eigen::Isometry3d camera = placedOnPlane(T_map_C, Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitY(), 0.0,
+                                                 0.0, 0.5 * M_PI);
+  EXPECT_TRUE((camera.linear() * Eigen::Vector3d::UnitZ()).isApprox(Eigen::Vector3d::UnitY())) << "looks along map y";
+  T_map_C.linear() = rotation(0.0, 0.5 * M_PI, 0.0) * mapFromOpticalWorld().linear();  // looking down
+  const Eigen::Isometry3d down = placedOnPlane(T_map_C, Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitY(), 0.0,
+                                               0.0, M_PI);
+  EXPECT_TRUE((down.linear() * Eigen::Vector3d::UnitZ()).isApprox(-Eigen::Vector3d::UnitZ())) << "still looks down";
+  EXPECT_TRUE((down.linear() * -Eigen::Vector3d::UnitY()).isApprox(-Eigen::Vector3d::UnitX()))
+      << "its image top points at the heading";
+}
+
 TEST(Frames, PosesRoundTripThroughMessages) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix();

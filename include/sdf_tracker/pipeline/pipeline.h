@@ -158,6 +158,10 @@ class SdfPipeline {
   /// The camera's pose is being searched for (after a loss with relocalise on, in a loaded map,
   /// after relocalise()).
   bool relocalising() const { return pose_unknown_ || relocaliser_->searching(); }
+  /// pose() is where the camera is, or was last seen (held during a loss); false while the
+  /// camera is searched for in a loaded map or after relocalise(), when pose() is only the start
+  /// pose.
+  bool poseKnown() const { return !pose_unknown_; }
   /// The keyframes the map was built from.
   const PlaceMemory& places() const { return *places_; }
 

@@ -6,6 +6,7 @@
 
 #include <ros/ros.h>
 #include <std_srvs/Empty.h>
+#include <std_srvs/Trigger.h>
 
 #include <Eigen/Geometry>
 
@@ -20,7 +21,8 @@ namespace sdf_tracker_ros {
 /// its keyframes, or that it has none, and whether the camera is searched for (Relocalise).
 std::string describePlaces(size_t keyframes, bool relocalise);
 
-/// The node's services (~reset, ~save_mesh, ~save_volume, ~save_volume_region, ~load_volume) and
+/// The node's services (~reset, ~relocalise, ~save_mesh, ~save_volume, ~save_volume_region,
+/// ~load_volume) and
 /// its files written at shut-down (trajectory, mesh, cloud, OutputTriangles, OutputVolume). Saving
 /// copies the map under the lock and extracts from the copy, so tracking waits only for the copy.
 class MapServices {
@@ -37,6 +39,8 @@ class MapServices {
 
  private:
   bool reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&);
+  /// Forgets where the camera is: the next frames search the whole map for it.
+  bool relocalise(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
   bool saveMesh(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res);
   bool saveVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::SavePath::Response& res);
   bool saveVolumeRegion(sdf_tracker::SaveRegion::Request& req, sdf_tracker::SaveRegion::Response& res);
@@ -55,7 +59,7 @@ class MapServices {
   TrackerState& state_;
   NodeOptions options_;
   std::function<Eigen::Isometry3d()> T_map_W_;
-  ros::ServiceServer reset_srv_, save_mesh_srv_, save_volume_srv_, save_volume_region_srv_, load_volume_srv_;
+  ros::ServiceServer reset_srv_, relocalise_srv_, save_mesh_srv_, save_volume_srv_, save_volume_region_srv_, load_volume_srv_;
 };
 
 }  // namespace sdf_tracker_ros

@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 #include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <nav_msgs/Path.h>
 #include <ros/ros.h>
 #include <sensor_msgs/Imu.h>
@@ -28,6 +29,15 @@ Eigen::Isometry3d mapFromOpticalWorld();
 /// viewing direction as levelling allows. Throws std::invalid_argument for a zero vector or one
 /// whose length is not finite.
 Eigen::Isometry3d gravityAlignedMapFromOpticalWorld(const Eigen::Vector3d& up_W);
+
+/// What a planar pose request (rviz's "2D Pose Estimate", amcl's /initialpose) means for a body
+/// whose pose in the map frame is `T_map_body`: the body moved to `x_m`, `y_m` in the map's
+/// horizontal plane and turned about the map's z axis until its heading axis `forward_body`
+/// (body x for a robot base, the optical z for a camera) points at `yaw_rad`; its height and its
+/// tilt (roll and pitch) are kept. A body whose heading axis is vertical turns its image-up axis
+/// `fallback_body` instead.
+Eigen::Isometry3d placedOnPlane(const Eigen::Isometry3d& T_map_body, const Eigen::Vector3d& forward_body,
+                                const Eigen::Vector3d& fallback_body, double x_m, double y_m, double yaw_rad);
 
 /// Whether an accelerometer reading [m/s^2] can say where up is: finite, and of a magnitude that
 /// gravity dominates (kMinGravityReading to kMaxGravityReading). A zero, NaN or absurd reading
@@ -50,6 +60,14 @@ class PoseBroadcaster {
   /// (its frame_id) at `stamp`. Returns the camera's pose in the map frame.
   Eigen::Isometry3d publish(const ros::Time& stamp, const std::string& image_frame, const Eigen::Isometry3d& T_W_C);
 
+  /// The camera pose T_W_C that a pose request on ~initialpose means, for images of `image_frame`
+  /// while the tracker holds `T_W_C_held`: x, y and yaw of the request (in its header's frame,
+  /// looked up in tf when that is not the map frame) set for ~base_frame (or the camera when
+  /// there is none), height, roll and pitch kept from the held pose (placedOnPlane). Throws
+  /// std::runtime_error with the reason when it cannot be used (tf missing, values not finite).
+  Eigen::Isometry3d requestedCameraPose(const geometry_msgs::PoseWithCovarianceStamped& request,
+                                        const std::string& image_frame, const Eigen::Isometry3d& T_W_C_held);
+
   /// The map frame's pose in the tracker's world, for map products (cloud, mesh).
   Eigen::Isometry3d T_map_W() const {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -63,13 +81,21 @@ class PoseBroadcaster {
   /// False when `child` already has a parent other than `parent` from another publisher (said
   /// once, then remembered): this node must not publish parent -> child.
   bool mayPublishParentOf(const std::string& child, const std::string& parent);
+  /// The camera frame of images of `image_frame` (~camera_frame overrides it).
+  std::string cameraFrameOf(const std::string& image_frame) const;
+  /// The mounting of the camera on ~base_frame (identity without one); throws
+  /// tf2::TransformException while tf does not have it.
+  Eigen::Isometry3d T_base_C(const std::string& camera_frame);
   void onImu(const sensor_msgs::ImuConstPtr& imu);
 
   FrameOptions frames_;
   int path_length_;
   mutable std::mutex mutex_;  ///< guards T_map_W_, map_frame_fixed_ and the IMU samples
   Eigen::Isometry3d T_map_W_;
-  bool map_frame_fixed_ = false;  ///< set at the first frame (after levelling, when an IMU is given)
+  /// Set at the first published pose (after levelling, when an IMU is given): in a loaded map,
+  /// once the camera has been found in it, so that the map frame is levelled as in the session
+  /// that built the map.
+  bool map_frame_fixed_ = false;
   std::set<std::string> refused_children_;
 
   tf2_ros::Buffer tf_buffer_;

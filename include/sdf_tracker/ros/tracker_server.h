@@ -8,6 +8,7 @@
 #include <thread>
 
 #include <dynamic_reconfigure/server.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
 #include <image_transport/image_transport.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -26,8 +27,9 @@ namespace sdf_tracker_ros {
 /// The ROS node over sdf_tracker::SdfPipeline, used by both the node and the nodelet. It only
 /// composes its parts: frames in (a one-slot mailbox drained by a frame thread: the newest frame
 /// is always the next one tracked, and every frame replaced unprocessed is counted as dropped),
-/// PoseBroadcaster (tf, ~pose, ~path), MapPublisher (~cloud, ~mesh on their own thread),
-/// MapServices, and live reconfiguration through the parameter table.
+/// PoseBroadcaster (tf, ~pose, ~path; nothing while the camera is searched for in the map),
+/// MapPublisher (~cloud, ~mesh on their own thread), MapServices, pose requests (~initialpose),
+/// and live reconfiguration through the parameter table.
 class TrackerServer {
  public:
   /// Throws std::invalid_argument when a parameter is invalid (the node then refuses to start).
@@ -52,6 +54,10 @@ class TrackerServer {
   /// The camera of `frame` (camera_info or the parameters); throws std::invalid_argument with the
   /// reason it cannot be used.
   sdf_tracker::PinholeCamera cameraFor(const Frame& frame);
+  /// Has the pipeline search for the camera from the pose on ~initialpose (images of
+  /// `image_frame`); says in the log what it did, or why the request is ignored. Called by the
+  /// frame thread with the state's lock held.
+  void applyPoseRequest(const geometry_msgs::PoseWithCovarianceStamped& request, const std::string& image_frame);
   void checkInputs(const ros::TimerEvent&);
   void reconfigure(sdf_tracker::SdfTrackerConfig& config, uint32_t level);
 
@@ -69,10 +75,14 @@ class TrackerServer {
   /// Until the first frame is tracked: notes image and camera_info arrivals, so the watchdog can say
   /// which one is missing (images are not deserialised).
   ros::Subscriber image_watch_sub_, info_watch_sub_;
+  /// ~initialpose (rviz's "2D Pose Estimate" through the launch files' remapping): the latest
+  /// request waits in pending_pose_request_ for the next frame.
+  ros::Subscriber initial_pose_sub_;
   std::string depth_topic_, info_topic_;
   std::mutex mailbox_mutex_;  ///< guards the members down to stopping_
   std::condition_variable mailbox_changed_;
   std::optional<Frame> pending_;
+  std::optional<geometry_msgs::PoseWithCovarianceStamped> pending_pose_request_;
   uint32_t frames_received_ = 0;
   uint32_t frames_dropped_ = 0;
   ros::WallTime last_image_wall_, last_info_wall_;
