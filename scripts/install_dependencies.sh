@@ -9,7 +9,7 @@ packages=(
   libpcl-dev libpcl-conversions-dev libtf2-ros-dev libtf2-eigen-dev libcv-bridge-dev libimage-transport-dev
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure python3-rostest librostest-dev
   python3-rosbag python3-rospy libopenni2-dev libtf-dev libtopic-tools-dev rviz
-  libcamera-info-manager-dev libfreenect-dev libfreenect-bin
+  libcamera-info-manager-dev libdiagnostic-updater-dev libfreenect-dev libfreenect-bin
 )
 
 missing=()

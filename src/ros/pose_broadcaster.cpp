@@ -12,7 +12,7 @@
 namespace sdf_tracker_ros {
 
 namespace {
-constexpr double kThrottle_s = 5.0;
+constexpr double kTfWaitThrottle_s = 5.0;
 /// Accelerometer readings this long before the first frame level the map frame.
 constexpr double kLevellingWindow_s = 0.2;
 }  // namespace
@@ -66,8 +66,10 @@ PoseBroadcaster::PoseBroadcaster(ros::NodeHandle nh, ros::NodeHandle pnh, const 
     : frames_(options.frames),
       path_length_(options.path_length),
       T_map_W_(mapFromOpticalWorld()),
-      tf_listener_(tf_buffer_, nh) {
+      tf_listener_(tf_buffer_, nh),
+      odometry_(options.frames.map_frame, options.frames.base_frame) {
   pose_pub_ = pnh.advertise<geometry_msgs::PoseStamped>("pose", 10);
+  odom_pub_ = pnh.advertise<nav_msgs::Odometry>("odom", 10);
   path_pub_ = pnh.advertise<nav_msgs::Path>("path", 1, true);
   path_.header.frame_id = frames_.map_frame;
   if (!options.imu_topic.empty()) {
@@ -96,6 +98,7 @@ void PoseBroadcaster::onImu(const sensor_msgs::ImuConstPtr& imu) {
 void PoseBroadcaster::clearPath() {
   path_poses_.clear();
   path_.poses.clear();
+  odometry_.restart();
 }
 
 bool PoseBroadcaster::mayPublishParentOf(const std::string& child, const std::string& parent) {
@@ -170,7 +173,8 @@ Eigen::Isometry3d PoseBroadcaster::requestedCameraPose(const geometry_msgs::Pose
 }
 
 Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::string& image_frame,
-                                           const Eigen::Isometry3d& T_W_C) {
+                                           const Eigen::Isometry3d& T_W_C,
+                                           const std::optional<Covariance6d>& covariance_W) {
   const std::string camera_frame = cameraFrameOf(image_frame);
   std::unique_lock<std::mutex> lock(mutex_);
   if (!map_frame_fixed_) {
@@ -213,6 +217,7 @@ Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::st
     map_frame_fixed_ = true;
   }
   const Eigen::Isometry3d T_map_C = T_map_W_ * T_W_C;
+  const Eigen::Matrix3d R_map_W = T_map_W_.linear();
   lock.unlock();
 
   geometry_msgs::PoseStamped pose;
@@ -236,11 +241,18 @@ Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::st
     try {
       T_map_base = T_map_C * T_base_C(camera_frame).inverse();
     } catch (const tf2::TransformException& e) {
-      ROS_WARN_THROTTLE(kThrottle_s, "sdf_tracker: waiting for tf %s -> %s (the camera's mounting on ~base_frame): %s",
+      ROS_WARN_THROTTLE(kTfWaitThrottle_s, "sdf_tracker: waiting for tf %s -> %s (the camera's mounting on ~base_frame): %s",
                         base.c_str(), camera_frame.c_str(), e.what());
       return T_map_C;
     }
   }
+  std::optional<Covariance6d> covariance;
+  if (covariance_W) {
+    covariance = bodyPoseCovariance(*covariance_W, R_map_W, T_map_base.translation() - T_map_C.translation());
+  }
+  odometry_.setChildFrame(base);
+  odom_pub_.publish(odometry_.build(stamp.toSec(), T_map_base, covariance));
+
   std::vector<geometry_msgs::TransformStamped> transforms;
   std::string parent = frames_.map_frame;
   if (!frames_.odom_frame.empty()) {

@@ -72,9 +72,10 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
   reconfigure_server_->setCallback(
       [this](sdf_tracker::SdfTrackerConfig& config, uint32_t level) { reconfigure(config, level); });
 
-  frame_thread_ = std::thread(&TrackerServer::frameLoop, this);
   const std::string depth_topic =
       options_.camera_name + (options_.depth_registered ? "/depth_registered/image" : "/depth/image");
+  diagnostics_ = std::make_unique<NodeDiagnostics>(nh_, pnh_, nh_.resolveName(depth_topic));
+  frame_thread_ = std::thread(&TrackerServer::frameLoop, this);
   if (options_.intrinsics_from_parameters) {
     depth_only_sub_ = it_.subscribe(depth_topic, kSubscriberQueue,
                                     [this](const sensor_msgs::ImageConstPtr& image) { onFrame(image, nullptr); });
@@ -223,6 +224,7 @@ void TrackerServer::process(const Frame& frame) {
     status.status = sdf_tracker::TrackingStatus::BAD_INPUT;
     status.status_text = "bad_input: " + why;
     status_pub_.publish(status);
+    diagnostics_->frameProcessed(status, (ros::Time::now() - image.header.stamp).toSec());
   };
 
   st::DepthImage depth;
@@ -264,6 +266,7 @@ void TrackerServer::process(const Frame& frame) {
         status.status = sdf_tracker::TrackingStatus::BAD_INPUT;
         status.status_text = "bad_input: stamped before the last frame";
         status_pub_.publish(status);
+        diagnostics_->frameProcessed(status, (ros::Time::now() - image.header.stamp).toSec());
         return;
       }
     }
@@ -329,11 +332,14 @@ void TrackerServer::process(const Frame& frame) {
   // While the camera is searched for in the map, its pose is not known: nothing goes on tf, ~pose,
   // ~path or the trajectory until a place is confirmed (the status says how the search goes).
   if (pose_known) {
-    const Eigen::Isometry3d T_map_C = poses_->publish(image.header.stamp, image.header.frame_id, T_W_C);
+    const Eigen::Isometry3d T_map_C = poses_->publish(
+        image.header.stamp, image.header.frame_id, T_W_C,
+        t.tracked() ? std::optional<Covariance6d>(t.covariance) : std::nullopt);
     std::lock_guard<std::mutex> lock(state_.mutex);
     state_.trajectory.push_back({image.header.stamp.toSec(), T_map_C});
   }
   status_pub_.publish(status);
+  diagnostics_->frameProcessed(status, (ros::Time::now() - image.header.stamp).toSec());
 
   if (pose_known && denoised_pub_.getNumSubscribers() > 0) {
     std::lock_guard<std::mutex> lock(state_.mutex);

@@ -17,6 +17,7 @@
 #include "sdf_tracker/pipeline/parameters.h"
 #include "sdf_tracker/ros/conversions.h"
 #include "sdf_tracker/ros/map_publisher.h"
+#include "sdf_tracker/ros/odometry.h"
 #include "sdf_tracker/ros/parameters.h"
 #include "sdf_tracker/ros/pose_broadcaster.h"
 
@@ -286,6 +287,49 @@ TEST(Frames, APlanarPoseRequestSetsPositionAndHeadingAndKeepsHeightAndTilt) {
   EXPECT_TRUE((down.linear() * Eigen::Vector3d::UnitZ()).isApprox(-Eigen::Vector3d::UnitZ())) << "still looks down";
   EXPECT_TRUE((down.linear() * -Eigen::Vector3d::UnitY()).isApprox(-Eigen::Vector3d::UnitX()))
       << "its image top points at the heading";
+}
+
+TEST(Odometry, TheTrackersCovarianceBecomesTheBodysInRosOrderAlongTheMapAxes) {
+  // The tracker's order is [rotation; translation]; ROS's is translation first.
+  Covariance6d camera = Covariance6d::Zero();
+  camera.diagonal() << 1e-4, 2e-4, 3e-4, 4e-6, 5e-6, 6e-6;
+  const Covariance6d same_place = bodyPoseCovariance(camera, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+  Eigen::Matrix<double, 6, 1> expected;
+  expected << 4e-6, 5e-6, 6e-6, 1e-4, 2e-4, 3e-4;
+  EXPECT_TRUE(same_place.diagonal().isApprox(expected)) << same_place.diagonal().transpose();
+  // A base 1 m ahead of the camera along map x: turning about z moves it sideways (y).
+  const Covariance6d ahead = bodyPoseCovariance(camera, Eigen::Matrix3d::Identity(), Eigen::Vector3d::UnitX());
+  EXPECT_NEAR(ahead(1, 1), 5e-6 + 3e-4, 1e-12);
+  EXPECT_NEAR(ahead(0, 0), 4e-6, 1e-12) << "not along the lever";
+  EXPECT_NEAR(ahead(1, 5), 3e-4, 1e-12) << "sideways motion and yaw go together";
+  // The world's axes turned into the map's: optical z (forward) is map x.
+  const Covariance6d in_map = bodyPoseCovariance(camera, mapFromOpticalWorld().linear(), Eigen::Vector3d::Zero());
+  EXPECT_NEAR(in_map(0, 0), 6e-6, 1e-15) << "map x is the optical z";
+  EXPECT_NEAR(in_map(5, 5), 2e-4, 1e-15) << "yaw is about the optical -y";
+}
+
+TEST(Odometry, TwistFromSuccessivePosesAndAHeldPoseGrowsItsCovariance) {
+  OdometryBuilder builder("map", "base_link");
+  Covariance6d tracked = 1e-6 * Covariance6d::Identity();
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();  // heading map y
+  const nav_msgs::Odometry first = builder.build(10.0, T, tracked);
+  EXPECT_EQ(first.header.frame_id, "map");
+  EXPECT_EQ(first.child_frame_id, "base_link");
+  EXPECT_DOUBLE_EQ(first.pose.covariance[0], 1e-6);
+  EXPECT_GE(first.twist.covariance[0], 1e5) << "no motion is known from one pose";
+
+  T.translation() = Eigen::Vector3d(0.05, 0.0, 0.0);  // 5 cm along map x in 0.1 s: to the body's right
+  const nav_msgs::Odometry second = builder.build(10.1, T, tracked);
+  EXPECT_NEAR(second.twist.twist.linear.x, 0.0, 1e-9);
+  EXPECT_NEAR(second.twist.twist.linear.y, -0.5, 1e-9) << "the twist is in the child frame";
+  EXPECT_NEAR(second.twist.covariance[7], 2e-6 / 0.01, 1e-9) << "two poses' variance over dt^2";
+
+  // Tracking failed for half a second: the held pose's covariance grows, never stays small.
+  const nav_msgs::Odometry held = builder.build(10.6, T, std::nullopt);
+  EXPECT_NEAR(held.pose.covariance[0], std::pow(1e-3 + 0.5 * kHeldSpeed_mps, 2), 1e-9);
+  EXPECT_NEAR(held.pose.covariance[35], std::pow(1e-3 + 0.5 * kHeldTurnRate_radps, 2), 1e-9);
+  EXPECT_GE(held.twist.covariance[0], 1e5);
 }
 
 TEST(Frames, PosesRoundTripThroughMessages) {

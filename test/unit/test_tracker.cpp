@@ -4,6 +4,8 @@
 #include <iostream>
 #include <limits>
 
+#include <Eigen/Cholesky>
+
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -52,6 +54,32 @@ TEST_F(TrackerFixture, RecoversAKnownOffsetOfTwoCentimetresAndTwoDegrees) {
   EXPECT_EQ(result.iterations_per_level.size(), 3u);
   EXPECT_GT(result.valid_points, 1000);
   EXPECT_LT(result.rms_residual_m, 0.005);
+}
+
+TEST_F(TrackerFixture, TheCovarianceIsPositiveDefiniteAndCoversTheTrueError) {
+  using Covariance = Eigen::Matrix<double, 6, 6>;
+  const Tracker tracker(TrackerConfig{});
+  const TrackResult exact = tracker.track(depth, camera, *volume, test::perturbed(T_W_C, 0.01, 0.01));
+  ASSERT_EQ(exact.status, TrackStatus::kOk) << exact.message;
+  EXPECT_TRUE(exact.covariance.isApprox(exact.covariance.transpose()));
+  EXPECT_EQ(Eigen::LLT<Covariance>(exact.covariance).info(), Eigen::Success) << exact.covariance;
+  const double floor_m = 0.1 * volume->voxelSize();
+  for (int i = 3; i < 6; ++i) EXPECT_GE(exact.covariance(i, i), 0.99 * floor_m * floor_m) << "a tenth of a voxel";
+
+  synthetic::NoiseModel kinect;  // the default: a Kinect's axial noise and quantisation
+  const DepthImage noisy = synthetic::Scene::indoorRoom().render(camera, T_W_C, kinect, 7);
+  const TrackResult measured = tracker.track(noisy, camera, *volume, test::perturbed(T_W_C, 0.01, 0.01));
+  ASSERT_EQ(measured.status, TrackStatus::kOk) << measured.message;
+  EXPECT_EQ(Eigen::LLT<Covariance>(measured.covariance).info(), Eigen::Success);
+  const double position_sigma = std::sqrt(measured.covariance.bottomRightCorner<3, 3>().trace());
+  const double rotation_sigma = std::sqrt(measured.covariance.topLeftCorner<3, 3>().trace());
+  const Eigen::Isometry3d error = T_W_C.inverse() * measured.T_W_C;
+  std::cout << "[ figures  ] noisy frame: position sigma " << position_sigma * 1000 << " mm (error "
+            << error.translation().norm() * 1000 << " mm), rotation sigma " << rotation_sigma * 180 / M_PI
+            << " deg (error " << rotationAngle(error) * 180 / M_PI << " deg)\n";
+  EXPECT_LT(error.translation().norm(), 3.0 * position_sigma) << "the stated uncertainty covers the error";
+  EXPECT_LT(rotationAngle(error), 3.0 * rotation_sigma);
+  EXPECT_LT(position_sigma, 0.01) << "all six directions are well constrained in the room";
 }
 
 TEST_F(TrackerFixture, ScheduleIsDataAndLevelsStopEarlyWhenConverged) {
@@ -229,6 +257,14 @@ TEST_F(WallFixture, ASinglePlaneIsSolvedInTheThreeDirectionsItConstrains) {
   EXPECT_NEAR(result.T_W_C.translation().y(), -0.02, 0.003);
   const Eigen::Vector3d x_axis = result.T_W_C.linear().col(0);
   EXPECT_NEAR(std::atan2(x_axis.y(), x_axis.x()), 0.03, 0.003) << "the roll about the wall's normal";
+  // The covariance ([rotation; translation], world axes) says the same: nothing is known along the
+  // wall and about its normal, the distance to it is known well.
+  const Eigen::Matrix<double, 6, 6>& P = result.covariance;
+  EXPECT_GT(P(3, 3), 0.1 * kUnconstrainedVariance) << "along the wall (x)";
+  EXPECT_GT(P(4, 4), 0.1 * kUnconstrainedVariance) << "along the wall (y)";
+  EXPECT_GT(P(2, 2), 1e4) << "about the wall's normal";
+  EXPECT_GT(P(5, 5), 0.0);
+  EXPECT_LT(P(5, 5), 1e-5) << "across the wall: the floor, a tenth of a voxel";
 
   // The paper's behaviour is still there: the frame fails and the guess is handed back.
   tracker_config.solve_constrained_directions = false;

@@ -16,6 +16,7 @@
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
+#include "sdf_tracker/ros/odometry.h"
 #include "sdf_tracker/ros/parameters.h"
 
 namespace sdf_tracker_ros {
@@ -51,14 +52,17 @@ bool isGravityReading(const Eigen::Vector3d& acceleration);
 /// or else the camera frame itself, so that map -> camera is the estimate. It never gives a frame a
 /// second parent: when the frame it would publish already has another parent, it says once which
 /// frame, which parent and which parameter to set, and publishes no tf (pose and path go on).
-/// Also publishes ~pose and a bounded ~path. Called from the frame thread only.
+/// Also publishes ~pose, a bounded ~path and ~odom (nav_msgs/Odometry of the base, with
+/// covariance). Called from the frame thread only.
 class PoseBroadcaster {
  public:
   PoseBroadcaster(ros::NodeHandle nh, ros::NodeHandle pnh, const NodeOptions& options);
 
   /// The estimate T_W_C (tracker world <- camera optical frame) for an image of `image_frame`
-  /// (its frame_id) at `stamp`. Returns the camera's pose in the map frame.
-  Eigen::Isometry3d publish(const ros::Time& stamp, const std::string& image_frame, const Eigen::Isometry3d& T_W_C);
+  /// (its frame_id) at `stamp`, with its covariance (TrackResult::covariance) when the frame was
+  /// tracked, none when the pose is held. Returns the camera's pose in the map frame.
+  Eigen::Isometry3d publish(const ros::Time& stamp, const std::string& image_frame, const Eigen::Isometry3d& T_W_C,
+                            const std::optional<Covariance6d>& covariance_W);
 
   /// The camera pose T_W_C that a pose request on ~initialpose means, for images of `image_frame`
   /// while the tracker holds `T_W_C_held`: x, y and yaw of the request (in its header's frame,
@@ -101,7 +105,8 @@ class PoseBroadcaster {
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
   tf2_ros::TransformBroadcaster tf_broadcaster_;
-  ros::Publisher pose_pub_, path_pub_;
+  ros::Publisher pose_pub_, path_pub_, odom_pub_;
+  OdometryBuilder odometry_;
   nav_msgs::Path path_;
   std::deque<geometry_msgs::PoseStamped> path_poses_;
 

@@ -18,6 +18,7 @@
 #include "sdf_tracker/pipeline/parameters.h"
 #include "sdf_tracker/ros/map_publisher.h"
 #include "sdf_tracker/ros/map_services.h"
+#include "sdf_tracker/ros/node_diagnostics.h"
 #include "sdf_tracker/ros/parameters.h"
 #include "sdf_tracker/ros/pose_broadcaster.h"
 #include "sdf_tracker/ros/tracker_state.h"
@@ -29,7 +30,7 @@ namespace sdf_tracker_ros {
 /// is always the next one tracked, and every frame replaced unprocessed is counted as dropped),
 /// PoseBroadcaster (tf, ~pose, ~path; nothing while the camera is searched for in the map),
 /// MapPublisher (~cloud, ~mesh on their own thread), MapServices, pose requests (~initialpose),
-/// and live reconfiguration through the parameter table.
+/// NodeDiagnostics (/diagnostics) and live reconfiguration through the parameter table.
 class TrackerServer {
  public:
   /// Throws std::invalid_argument when a parameter is invalid (the node then refuses to start).
@@ -103,6 +104,7 @@ class TrackerServer {
   std::optional<sdf_tracker::PinholeCamera> announced_camera_;
   bool lost_ = false;
 
+  std::unique_ptr<NodeDiagnostics> diagnostics_;
   std::unique_ptr<MapServices> services_;
   std::unique_ptr<MapPublisher> map_publisher_;
   std::unique_ptr<dynamic_reconfigure::Server<sdf_tracker::SdfTrackerConfig>> reconfigure_server_;

@@ -77,6 +77,10 @@ enum class TrackStatus {
 
 const char* toString(TrackStatus status);
 
+/// The variance a pose's covariance states along a direction the view does not constrain: nothing
+/// is known there (in the tracker's balanced units: metres, and radians times the RMS lever arm).
+constexpr double kUnconstrainedVariance = 1e6;
+
 struct TrackResult {
   TrackStatus status = TrackStatus::kBadInput;
   /// The estimate (camera to world). For kOk and kNotConverged it is the optimised pose; for any
@@ -95,6 +99,13 @@ struct TrackResult {
   /// directions), not the guess handed back.
   bool pose_estimated = false;
   double final_step = 0.0;  ///< |delta xi| of the last iteration.
+  /// The covariance of T_W_C, for a pose estimated: of a small motion xi = [rotation; translation]
+  /// about the camera centre along the world's axes (rad^2, m^2; T = Tr(c) exp(xi) Tr(-c) T_W_C),
+  /// from the last iteration's normal equations scaled by their residual variance, at least a
+  /// tenth of a voxel of standard deviation along every constrained direction. Along
+  /// directions the view does not constrain (constrained_rank < 6) the variance is
+  /// kUnconstrainedVariance. Zero when nothing was estimated.
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
   std::string message;      ///< why, in words, when status != kOk.
 
   bool ok() const { return status == TrackStatus::kOk; }

@@ -1,0 +1,54 @@
+#pragma once
+
+#include <deque>
+#include <mutex>
+#include <string>
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <ros/ros.h>
+
+#include "sdf_tracker/TrackingStatus.h"
+
+namespace sdf_tracker_ros {
+
+/// The node's health on /diagnostics (diagnostic_updater, read by rqt_robot_monitor and
+/// diagnostic_aggregator), once a second:
+/// - "<node>: frames": frames processed per second against those the camera sent, dropped, the
+///   latency from an image's stamp to its pose; ERROR when no frame came for kStaleAfter_s, WARN
+///   while more than half of the camera's frames are dropped.
+/// - "<node>: tracking": the last status and failures in a row, at the level the log uses: OK
+///   when tracked, WARN for a frame that failed (or a search under way), ERROR once tracking is
+///   lost (~status's `lost`).
+class NodeDiagnostics {
+ public:
+  static constexpr double kStaleAfter_s = 3.0;
+  /// Seconds of frames the rates are measured over.
+  static constexpr double kRateWindow_s = 5.0;
+
+  /// `hardware_id`: the depth topic the node listens on.
+  NodeDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& hardware_id);
+
+  /// A frame's ~status, and the seconds from its image's stamp to its outputs. Frame thread.
+  void frameProcessed(const sdf_tracker::TrackingStatus& status, double latency_s);
+
+ private:
+  void frames(diagnostic_updater::DiagnosticStatusWrapper& stat);
+  void tracking(diagnostic_updater::DiagnosticStatusWrapper& stat);
+  /// Forgets the processed frames older than the rate window.
+  void trim(const ros::WallTime& now);
+
+  diagnostic_updater::Updater updater_;
+  ros::Timer timer_;
+  std::mutex mutex_;  ///< guards the members below
+  struct Processed {
+    ros::WallTime wall;
+    uint32_t frames_received;  ///< the node's count when it was processed
+    uint32_t frames_dropped;
+    double latency_s;
+  };
+  std::deque<Processed> window_;
+  sdf_tracker::TrackingStatus last_;
+  bool any_ = false;
+};
+
+}  // namespace sdf_tracker_ros

@@ -1,0 +1,92 @@
+#include "sdf_tracker/ros/node_diagnostics.h"
+
+#include <algorithm>
+
+namespace sdf_tracker_ros {
+
+using diagnostic_msgs::DiagnosticStatus;
+
+NodeDiagnostics::NodeDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& hardware_id)
+    : updater_(nh, pnh, pnh.getNamespace()) {  // the nodelet's own name, not its manager's
+  updater_.setHardwareID(hardware_id);
+  updater_.add("frames", this, &NodeDiagnostics::frames);
+  updater_.add("tracking", this, &NodeDiagnostics::tracking);
+  // The updater publishes at its own period (~diagnostic_period, 1 s); it has to be asked often.
+  timer_ = nh.createTimer(ros::Duration(0.25), [this](const ros::TimerEvent&) { updater_.update(); });
+}
+
+void NodeDiagnostics::frameProcessed(const sdf_tracker::TrackingStatus& status, double latency_s) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const ros::WallTime now = ros::WallTime::now();
+  window_.push_back({now, status.frames_received, status.frames_dropped, latency_s});
+  trim(now);
+  last_ = status;
+  any_ = true;
+}
+
+void NodeDiagnostics::trim(const ros::WallTime& now) {
+  // The oldest frame kept is the reference the rates are counted from.
+  while (window_.size() > 2 && (now - window_[1].wall).toSec() > kRateWindow_s) window_.pop_front();
+}
+
+void NodeDiagnostics::frames(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const ros::WallTime now = ros::WallTime::now();
+  trim(now);
+  if (!any_) {
+    stat.summary(DiagnosticStatus::WARN, "no frame yet");
+    return;
+  }
+  const Processed& first = window_.front();
+  const Processed& last = window_.back();
+  const double since_last_s = (now - last.wall).toSec();
+  const double span_s = (last.wall - first.wall).toSec();
+  const double processed_hz = span_s > 0.0 ? (window_.size() - 1) / span_s : 0.0;
+  const double received_hz = span_s > 0.0 ? (last.frames_received - first.frames_received) / span_s : 0.0;
+  const uint32_t dropped = last.frames_dropped - first.frames_dropped;
+  const uint32_t received = last.frames_received - first.frames_received;
+  double latency_max_s = 0.0, latency_sum_s = 0.0;
+  for (const Processed& p : window_) {
+    latency_max_s = std::max(latency_max_s, p.latency_s);
+    latency_sum_s += p.latency_s;
+  }
+  stat.add("frames processed per second", processed_hz);
+  stat.add("frames received per second", received_hz);
+  stat.add("frames received", last.frames_received);
+  stat.add("frames dropped", last.frames_dropped);
+  stat.add("latency mean [s]", latency_sum_s / window_.size());
+  stat.add("latency max [s]", latency_max_s);
+  stat.add("seconds since the last frame", since_last_s);
+  if (since_last_s > kStaleAfter_s) {
+    stat.summaryf(DiagnosticStatus::ERROR, "no frame for %.1f s", since_last_s);
+  } else if (received > 0 && 2 * dropped > received) {
+    stat.summaryf(DiagnosticStatus::WARN, "dropping %u of %u frames: the tracker is slower than the camera",
+                  dropped, received);
+  } else {
+    stat.summaryf(DiagnosticStatus::OK, "%.1f frames/s of the camera's %.1f", processed_hz, received_hz);
+  }
+}
+
+void NodeDiagnostics::tracking(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!any_) {
+    stat.summary(DiagnosticStatus::WARN, "no frame yet");
+    return;
+  }
+  stat.add("status", last_.status_text);
+  stat.add("failures in a row", last_.consecutive_failures);
+  stat.add("lost", last_.lost ? "true" : "false");
+  stat.add("overlap", last_.overlap);
+  stat.add("constrained directions", static_cast<int>(last_.constrained_rank));
+  stat.add("residual RMS [m]", last_.rms_residual_m);
+  stat.add("tracking [ms]", last_.tracking_ms);
+  if (last_.lost) {
+    stat.summary(DiagnosticStatus::ERROR, "lost: " + last_.status_text);
+  } else if (last_.status != sdf_tracker::TrackingStatus::OK) {
+    stat.summary(DiagnosticStatus::WARN, last_.status_text);
+  } else {
+    stat.summary(DiagnosticStatus::OK, "tracking");
+  }
+}
+
+}  // namespace sdf_tracker_ros
