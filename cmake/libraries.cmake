@@ -31,7 +31,7 @@ sdf_tracker_part(pipeline SOURCES parameters pipeline DEPENDS fusion tracking su
 sdf_tracker_part(io SOURCES depth_png files map_file mesh_file sdfmap_file trajectory_file tum_sequence vti_file
   DEPENDS camera map surface places LINK ${OpenCV_LIBS})
 target_include_directories(sdf_tracker_io SYSTEM PRIVATE ${OpenCV_INCLUDE_DIRS})
-sdf_tracker_part(sim SOURCES synthetic DEPENDS io)
+sdf_tracker_part(sim SOURCES synthetic wheel_odometry DEPENDS io)
 sdf_tracker_part(eval SOURCES evaluation DEPENDS io)
 
 # Depth cameras' own formats, without ROS or the vendors' libraries: the Kinect v1's disparity
@@ -40,7 +40,8 @@ sdf_tracker_part(devices SOURCES fakenect_dump kinect_disparity oni_file recordi
 
 # What the command-line tools share (with the ROS layer's tools too): arguments, output folders,
 # reports; and the tools.
-sdf_tracker_part(cli SOURCES command_line output_folder report DEPENDS pipeline io eval)
+sdf_tracker_part(cli SOURCES command_line odometry_track option_values output_folder report tracker_alone
+  DEPENDS pipeline io eval)
 sdf_tracker_part(tools PROGRAMS sdf_tracker_offline sdf_tracker_synth sdf_tracker_evaluate tum_to_fakenect tum_to_oni
   DEPENDS cli sim devices)
 
@@ -66,7 +67,8 @@ set(SDF_TRACKER_UNIT_TEST_LIBRARIES sdf_tracker_pipeline sdf_tracker_io sdf_trac
 # to a minute each, run in the release build only.
 set(SDF_TRACKER_SEQUENCE_TEST_SOURCES ${SDF_TRACKER_TEST_DIR}/support/test_main.cpp
   ${SDF_TRACKER_TEST_DIR}/sequences/test_end_to_end.cpp ${SDF_TRACKER_TEST_DIR}/sequences/test_map_sequences.cpp
-  ${SDF_TRACKER_TEST_DIR}/sequences/test_relocalisation_runs.cpp)
+  ${SDF_TRACKER_TEST_DIR}/sequences/test_relocalisation_runs.cpp
+  ${SDF_TRACKER_TEST_DIR}/sequences/test_odometry_prior.cpp)
 # The command-line tools' tests: their libraries, and the programs run as a user runs them.
 set(SDF_TRACKER_TOOLS_TEST_SOURCES ${SDF_TRACKER_TEST_DIR}/support/test_main.cpp
   ${SDF_TRACKER_TEST_DIR}/tools/test_tools.cpp ${SDF_TRACKER_TEST_DIR}/tools/test_devices.cpp)

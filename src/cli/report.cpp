@@ -174,4 +174,11 @@ void ProgressBar::finish() {
   if (enabled_) std::fprintf(stderr, "\n");
 }
 
+double percentile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * (values.size() - 1) + 0.5));
+  std::nth_element(values.begin(), values.begin() + k, values.end());
+  return values[k];
+}
+
 }  // namespace sdf_tracker::tools

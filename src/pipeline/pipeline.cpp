@@ -116,6 +116,7 @@ void SdfPipeline::reset() {
   clearMap();
   T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   motion_.clear();
+  T_odom_C_held_.reset();
 }
 
 void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemory> places) {
@@ -128,6 +129,7 @@ void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemo
   map_initialised_ = true;
   consecutive_failures_ = 0;
   motion_.clear();
+  T_odom_C_held_.reset();
   relocaliser_->cancel();
   pose_unknown_ = config_.relocalise;
   search_guess_.reset();  // the start pose is tried anyway, as the held pose
@@ -139,6 +141,7 @@ void SdfPipeline::relocalise(const std::optional<Eigen::Isometry3d>& guess) {
   relocaliser_->cancel();
   pose_unknown_ = true;
   search_guess_ = guess;
+  T_odom_C_held_.reset();
 }
 
 void SdfPipeline::updateConfig(const PipelineConfig& candidate) {
@@ -263,17 +266,19 @@ bool SdfPipeline::search(const DepthImage& filtered, const PinholeCamera& camera
   return false;
 }
 
-FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s) {
-  return process(depth, camera, timestamp_s, std::nullopt);
+FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s,
+                                      const std::optional<Eigen::Isometry3d>& T_odom_C) {
+  return process(depth, camera, timestamp_s, std::nullopt, T_odom_C);
 }
 
 FrameReport SdfPipeline::processFrameAtPose(const DepthImage& depth, const PinholeCamera& camera,
                                             const Eigen::Isometry3d& T_W_C, double timestamp_s) {
-  return process(depth, camera, timestamp_s, T_W_C);
+  return process(depth, camera, timestamp_s, T_W_C, std::nullopt);
 }
 
 FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s,
-                                 const std::optional<Eigen::Isometry3d>& given_T_W_C) {
+                                 const std::optional<Eigen::Isometry3d>& given_T_W_C,
+                                 const std::optional<Eigen::Isometry3d>& T_odom_C) {
   FrameReport report;
   report.track.T_W_C = T_W_C_;
   const std::string mismatch = camera.sizeMismatch(depth.width(), depth.height());
@@ -320,7 +325,11 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     consecutive_failures_ = 0;
   } else {
     const auto start = std::chrono::steady_clock::now();
-    const Eigen::Isometry3d predicted = given_T_W_C ? *given_T_W_C : predictPose(timestamp_s);
+    // The other odometry's motion since the held pose, else constant velocity.
+    const Eigen::Isometry3d predicted = given_T_W_C                  ? *given_T_W_C
+                                        : T_odom_C && T_odom_C_held_ ? T_W_C_ * (T_odom_C_held_->inverse() * *T_odom_C)
+                                                                     : predictPose(timestamp_s);
+    report.predicted_by_odometry = !given_T_W_C && T_odom_C && T_odom_C_held_;
     // Swapped blocks the frame may see come back first; the held pose's too, for the retry below.
     restoreNear(predicted, ideal_camera, furthest_m, &report);
     restoreNear(T_W_C_, ideal_camera, furthest_m, &report);
@@ -358,6 +367,7 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     consecutive_failures_ = 0;
   }
   motion_.addTracked(timestamp_s, T_W_C_);
+  T_odom_C_held_ = T_odom_C;
   if (config_.relocalise) places_->offer(filtered, T_W_C_);
 
   const Eigen::Isometry3d motion = T_W_C_last_fused_.inverse() * T_W_C_;

@@ -474,6 +474,7 @@ void writeSequence(const std::string& directory, const SequenceSpec& spec) {
     poses.push_back({t, T_W_C});
   }
   io::writeTrajectory(directory + "/groundtruth.txt", poses);
+  if (spec.odometry) io::writeTrajectory(directory + "/odometry.txt", wheelOdometry(poses, *spec.odometry));
   // What a resting accelerometer fixed to the depth camera reads (gravity's reaction, up: -y in
   // this world), at 100 Hz from half a second before the first frame, in the camera's frame.
   std::ostringstream accelerometer;

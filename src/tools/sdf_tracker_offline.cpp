@@ -18,8 +18,11 @@
 #endif
 
 #include "sdf_tracker/cli/command_line.h"
+#include "sdf_tracker/cli/odometry_track.h"
+#include "sdf_tracker/cli/option_values.h"
 #include "sdf_tracker/cli/output_folder.h"
 #include "sdf_tracker/cli/report.h"
+#include "sdf_tracker/cli/tracker_alone.h"
 #include "sdf_tracker/io/files.h"
 #include "sdf_tracker/io/map_file.h"
 #include "sdf_tracker/io/mesh_file.h"
@@ -62,6 +65,9 @@ Tracks a depth camera through a TUM-layout sequence and reconstructs the scene.
   --initial-pose TX,TY,TZ,QX,QY,QZ,QW  with --load-volume: where the first camera is in the
                         loaded map (camera to map, metres and a unit quaternion); verified like
                         any relocalisation candidate before anything is fused (needs Relocalise)
+  --odometry FILE       another odometry beside the tracker (a robot's wheels): the camera's poses
+                        in its frame, TUM format (sdf_tracker_synth --odometry writes odometry.txt);
+                        its motion predicts each frame and holds where the view constrains nothing
   --save-map            also write the map as map.sdfmap (every block, exactly, and the place
                         memory; reloadable)
   --save-volume         also write the map as sdf_volume.vti (ParaView) and triangles.obj
@@ -78,50 +84,6 @@ Tracks a depth camera through a TUM-layout sequence and reconstructs the scene.
   --list-params         print every parameter with its value in the chosen preset and exit
 )";
 
-/// The comma-separated numbers of `option`'s value.
-std::vector<double> parseNumberList(const std::string& option, const std::string& text) {
-  std::vector<double> values;
-  std::istringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) values.push_back(st::parseNumber(option, item));
-  return values;
-}
-
-/// --initial-pose: camera to map from TX,TY,TZ,QX,QY,QZ,QW (a unit quaternion, within 1e-3).
-Eigen::Isometry3d parseInitialPose(const std::string& text) {
-  const std::vector<double> v = parseNumberList("--initial-pose", text);
-  if (v.size() != 7) throw std::invalid_argument("--initial-pose: expected TX,TY,TZ,QX,QY,QZ,QW, got \"" + text + "\"");
-  const Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
-  if (std::abs(q.norm() - 1.0) > 1e-3) {
-    throw std::invalid_argument("--initial-pose " + text + ": the quaternion QX,QY,QZ,QW has norm " +
-                                std::to_string(q.norm()) + ", not 1");
-  }
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = q.normalized().toRotationMatrix();
-  T.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
-  return T;
-}
-
-st::LensDistortion parseDistortion(const std::string& text) {
-  const std::vector<double> v = parseNumberList("--distortion", text);
-  if (v.size() != 5) throw std::invalid_argument("--distortion: expected K1,K2,P1,P2,K3, got \"" + text + "\"");
-  return {v[0], v[1], v[2], v[3], v[4]};
-}
-
-st::PinholeCamera parseIntrinsics(const std::string& text, const st::PinholeCamera& base) {
-  const std::vector<double> v = parseNumberList("--intrinsics", text);
-  if (v.size() != 4 && v.size() != 6) {
-    throw std::invalid_argument("--intrinsics: expected FX,FY,CX,CY[,W,H], got \"" + text + "\"");
-  }
-  st::PinholeCamera camera = base;
-  camera.fx = v[0], camera.fy = v[1], camera.cx = v[2], camera.cy = v[3];
-  if (v.size() == 6) {
-    camera.width = st::tools::wholeNumber(v[4], "--intrinsics: the width W", text);
-    camera.height = st::tools::wholeNumber(v[5], "--intrinsics: the height H", text);
-  }
-  return camera;
-}
-
 /// Checks before tracking that --volume-region can be exported at the end: that it holds a grid
 /// and that the grid and its write buffer fit in the memory there is now.
 void requireExportable(const st::TsdfMap& map, const Eigen::AlignedBox3d& region_W, const std::string& text) {
@@ -137,89 +99,18 @@ void requireExportable(const st::TsdfMap& map, const Eigen::AlignedBox3d& region
   }
 }
 
-Eigen::AlignedBox3d parseRegion(const std::string& text) {
-  const std::vector<double> v = parseNumberList("--volume-region", text);
-  if (v.size() != 6 || !(v[0] < v[3] && v[1] < v[4] && v[2] < v[5])) {
-    throw std::invalid_argument("--volume-region: expected X0,Y0,Z0,X1,Y1,Z1 with X0 < X1, Y0 < Y1, Z0 < Z1, got \"" +
-                                text + "\"");
-  }
-  return Eigen::AlignedBox3d(Eigen::Vector3d(v[0], v[1], v[2]), Eigen::Vector3d(v[3], v[4], v[5]));
-}
-
 std::string joinIterations(const std::vector<int>& iterations) {
   std::string s;
   for (size_t i = 0; i < iterations.size(); ++i) s += (i ? "/" : "") + std::to_string(iterations[i]);
   return s.empty() ? "-" : s;
 }
 
-double percentile(std::vector<double> values, double q) {
-  if (values.empty()) return 0.0;
-  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * (values.size() - 1) + 0.5));
-  std::nth_element(values.begin(), values.begin() + k, values.end());
-  return values[k];
-}
-
-/// For --fuse-ground-truth: each frame's ground-truth pose (associated within 0.02 s) relative to
-/// the first associated frame's, which is the tracker's start pose; none for frames without one.
-std::vector<std::optional<Eigen::Isometry3d>> truePosesInFirstFrame(const st::TumSequence& sequence) {
-  if (sequence.groundTruth().empty()) {
-    throw std::invalid_argument("--fuse-ground-truth needs the sequence's groundtruth.txt, which is missing or empty");
-  }
-  std::vector<st::io::StampedPose> frames;
-  for (size_t i = 0; i < sequence.size(); ++i) frames.push_back({sequence.timestamp(i), Eigen::Isometry3d::Identity()});
-  std::vector<std::optional<Eigen::Isometry3d>> poses(sequence.size());
-  std::optional<Eigen::Isometry3d> first_inverse;
-  for (const auto& [frame, truth] : st::evaluation::associate(frames, sequence.groundTruth())) {
-    const Eigen::Isometry3d& T_gt = sequence.groundTruth()[truth].T_W_C;
-    if (!first_inverse) first_inverse = T_gt.inverse();
-    poses[frame] = *first_inverse * T_gt;
-  }
-  if (!first_inverse) {
-    throw std::invalid_argument("--fuse-ground-truth: no frame has a ground-truth pose within 0.02 s of its timestamp");
-  }
-  return poses;
-}
-
-/// --fuse-ground-truth's figures: each frame's translation error against its true pose.
-struct SingleFrameErrors {
-  explicit SingleFrameErrors(const std::vector<double>& errors_m)
-      : stats(st::evaluation::summarize(errors_m)),
-        p90_m(percentile(errors_m, 0.9)),
-        p99_m(percentile(errors_m, 0.99)),
-        over_1cm(std::count_if(errors_m.begin(), errors_m.end(), [](double e) { return e > 0.01; })) {}
-  st::evaluation::ErrorStats stats;
-  double p90_m, p99_m;
-  size_t over_1cm;
-
-  std::string summaryLine(size_t without_ground_truth) const {
-    std::ostringstream out;
-    out << "tracker alone (--fuse-ground-truth): ";
-    if (stats.count == 0) {
-      out << "no frame tracked\n";
-      return out.str();
-    }
-    out << std::setprecision(3) << "translation error per frame (mm) mean " << 1000 * stats.mean << ", median "
-        << 1000 * stats.median << ", p90 " << 1000 * p90_m << ", p99 " << 1000 * p99_m << ", max " << 1000 * stats.max
-        << "; over 1 cm: " << over_1cm << " of " << stats.count << " frames";
-    if (without_ground_truth > 0) out << "; " << without_ground_truth << " frames without ground truth skipped";
-    out << "\n";
-    return out.str();
-  }
-  std::string json() const {
-    using st::tools::jsonNumber;
-    std::ostringstream out;
-    out << "{\"rmse\": " << jsonNumber(stats.rmse) << ", \"mean\": " << jsonNumber(stats.mean) << ", \"median\": "
-        << jsonNumber(stats.median) << ", \"p90\": " << jsonNumber(p90_m) << ", \"max\": " << jsonNumber(stats.max)
-        << ", \"frames_over_1cm\": " << over_1cm << ", \"frames\": " << stats.count << "}";
-    return out.str();
-  }
-};
 
 int run(int argc, char** argv) {
   const st::tools::CommandLine args(
       argc, argv,
       {"sequence", "output", "preset", "param", "frames", "threads", "depth-factor", "intrinsics", "distortion",
-       "load-volume", "initial-pose", "volume-region"},
+       "load-volume", "initial-pose", "volume-region", "odometry"},
       {"save-map", "save-volume", "fuse-ground-truth", "raycast", "quiet", "list-params", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -272,8 +163,11 @@ int run(int argc, char** argv) {
   if (output_dir.empty()) throw std::invalid_argument("--output must name a folder (got an empty path)");
   st::SequenceOptions options;
   if (args.has("depth-factor")) options.depth_factor = args.getDouble("depth-factor", 0.0);
-  if (args.has("intrinsics")) options.camera = parseIntrinsics(args.get("intrinsics"), st::PinholeCamera::tumFreiburg1());
-  if (args.has("distortion")) options.distortion = parseDistortion(args.get("distortion"));
+  if (args.has("intrinsics")) {
+    options.camera =
+        st::tools::parseIntrinsics("--intrinsics", args.get("intrinsics"), st::PinholeCamera::tumFreiburg1());
+  }
+  if (args.has("distortion")) options.distortion = st::tools::parseDistortion("--distortion", args.get("distortion"));
   st::TumSequence sequence = st::TumSequence::open(sequence_dir, options);
   if (args.has("frames")) {
     const int frames = args.getInt("frames", 0);
@@ -283,11 +177,13 @@ int run(int argc, char** argv) {
   std::optional<Eigen::AlignedBox3d> volume_region;
   if (args.has("volume-region")) {
     if (!args.has("save-volume")) throw std::invalid_argument("--volume-region applies to --save-volume, which is not given");
-    volume_region = parseRegion(args.get("volume-region"));
+    volume_region = st::tools::parseBox("--volume-region", args.get("volume-region"));
   }
   // --fuse-ground-truth: each frame's true pose in the tracker's world (the first such frame's).
   std::vector<std::optional<Eigen::Isometry3d>> true_T_W_C;
-  if (args.has("fuse-ground-truth")) true_T_W_C = truePosesInFirstFrame(sequence);
+  if (args.has("fuse-ground-truth")) true_T_W_C = st::tools::truePosesInFirstFrame(sequence);
+  std::optional<st::tools::OdometryTrack> odometry;
+  if (args.has("odometry")) odometry = st::tools::OdometryTrack::read(args.get("odometry"));
   const std::vector<std::string> summaries = {"summary.txt", "summary.json"};
   st::tools::OutputFolder output(output_dir, {"trajectory.txt", "frames.csv", "mesh.ply", "cloud.ply", "sdf_volume.vti",
                                               "map.sdfmap", "triangles.obj", "trajectory.png", "summary.txt", "summary.json"});
@@ -323,7 +219,7 @@ int run(int argc, char** argv) {
     }
     // The file's grid replaces the configured one: the rules between parameters must hold for it.
     st::throwIfInvalid("parameters with the grid of " + path, st::Settings{pipeline.config(), settings.camera}.validate());
-    if (args.has("initial-pose")) pipeline.relocalise(parseInitialPose(args.get("initial-pose")));
+    if (args.has("initial-pose")) pipeline.relocalise(st::tools::parsePose("--initial-pose", args.get("initial-pose")));
   }
   if (volume_region) requireExportable(pipeline.map(), *volume_region, args.get("volume-region"));
   const auto& v = pipeline.config().volume;
@@ -347,7 +243,7 @@ int run(int argc, char** argv) {
   const auto start = std::chrono::steady_clock::now();
   std::vector<double> single_frame_errors_m;  // --fuse-ground-truth
   std::vector<double> search_ms;              // frames spent searching for the camera (Relocalise)
-  size_t relocalisations = 0;
+  size_t relocalisations = 0, predicted_by_odometry = 0;
   size_t without_ground_truth = 0;
   for (size_t i = 0; i < sequence.size(); ++i) {
     if (!true_T_W_C.empty() && !true_T_W_C[i]) {
@@ -372,9 +268,12 @@ int run(int argc, char** argv) {
       continue;
     }
     const st::DepthImage& depth = *read;
-    const st::FrameReport report = true_T_W_C.empty()
-                                       ? pipeline.processFrame(depth, camera, sequence.timestamp(i))
-                                       : pipeline.processFrameAtPose(depth, camera, *true_T_W_C[i], sequence.timestamp(i));
+    const std::optional<Eigen::Isometry3d> T_odom_C =
+        odometry ? odometry->at(sequence.timestamp(i)) : std::optional<Eigen::Isometry3d>();
+    const st::FrameReport report =
+        true_T_W_C.empty() ? pipeline.processFrame(depth, camera, sequence.timestamp(i), T_odom_C)
+                           : pipeline.processFrameAtPose(depth, camera, *true_T_W_C[i], sequence.timestamp(i));
+    predicted_by_odometry += report.predicted_by_odometry;
     const st::TrackResult& t = report.track;
     if (report.relocalisation.searched) {
       search_ms.push_back(report.relocalisation.search_ms);
@@ -460,13 +359,16 @@ int run(int argc, char** argv) {
             << "(bad_input), the first: " << first_unreadable << "\n";
   }
   summary << "speed " << sequence.size() / elapsed_s << " frames/s including file reading; per frame (ms): median "
-          << percentile(frame_ms, 0.5) << ", p95 " << percentile(frame_ms, 0.95) << "; tracking median "
-          << percentile(tracking_ms, 0.5) << ", fusion median " << percentile(fusion_ms, 0.5);
-  if (!raycast_ms.empty()) summary << ", ray casting median " << percentile(raycast_ms, 0.5);
+          << st::tools::percentile(frame_ms, 0.5) << ", p95 " << st::tools::percentile(frame_ms, 0.95) << "; tracking median "
+          << st::tools::percentile(tracking_ms, 0.5) << ", fusion median " << st::tools::percentile(fusion_ms, 0.5);
+  if (!raycast_ms.empty()) summary << ", ray casting median " << st::tools::percentile(raycast_ms, 0.5);
   if (!search_ms.empty()) {
     summary << "\nrelocalisation: " << search_ms.size() << " frames searched the map for the camera (ms per frame: "
-            << "median " << percentile(search_ms, 0.5) << ", max " << percentile(search_ms, 1.0) << "), "
+            << "median " << st::tools::percentile(search_ms, 0.5) << ", max " << st::tools::percentile(search_ms, 1.0) << "), "
             << relocalisations << " found it";
+  }
+  if (odometry) {
+    summary << "\nodometry: " << predicted_by_odometry << " frames predicted from " << args.get("odometry");
   }
   summary << "\nplace memory: " << pipeline.places().keyframes().size() << " keyframes, "
           << pipeline.places().bytesPerKeyframe() << " bytes each";
@@ -502,8 +404,8 @@ int run(int argc, char** argv) {
   const std::vector<std::pair<const char*, const std::vector<double>*>> stages = {
       {"frame", &frame_ms}, {"tracking", &tracking_ms}, {"fusion", &fusion_ms}, {"raycast", &raycast_ms}};
   for (size_t i = 0; i < stages.size(); ++i) {
-    json << (i ? ", " : "") << "\"" << stages[i].first << "_median\": " << jsonNumber(percentile(*stages[i].second, 0.5))
-         << ", \"" << stages[i].first << "_p95\": " << jsonNumber(percentile(*stages[i].second, 0.95));
+    json << (i ? ", " : "") << "\"" << stages[i].first << "_median\": " << jsonNumber(st::tools::percentile(*stages[i].second, 0.5))
+         << ", \"" << stages[i].first << "_p95\": " << jsonNumber(st::tools::percentile(*stages[i].second, 0.95));
   }
   json << "},\n  \"peak_rss_mb\": " << jsonNumber(peak_rss_mb)
        << ",\n  \"grid_mb\": " << jsonNumber(pipeline.map().memoryBytes() / 1048576.0)
@@ -511,11 +413,11 @@ int run(int argc, char** argv) {
        << jsonNumber(pipeline.memoryBudget() ? pipeline.memoryBudget()->swap().bytesOnDisk() / 1048576.0 : 0.0)
        << ",\n  \"elapsed_s\": " << jsonNumber(elapsed_s)
        << ",\n  \"relocalisation\": {\"searched_frames\": " << search_ms.size() << ", \"found\": " << relocalisations
-       << ", \"ms_median\": " << jsonNumber(percentile(search_ms, 0.5))
-       << ", \"ms_max\": " << jsonNumber(percentile(search_ms, 1.0))
+       << ", \"ms_median\": " << jsonNumber(st::tools::percentile(search_ms, 0.5))
+       << ", \"ms_max\": " << jsonNumber(st::tools::percentile(search_ms, 1.0))
        << ", \"keyframes\": " << pipeline.places().keyframes().size() << "}";
   if (!true_T_W_C.empty()) {
-    const SingleFrameErrors errors(single_frame_errors_m);
+    const st::tools::SingleFrameErrors errors(single_frame_errors_m);
     summary << errors.summaryLine(without_ground_truth);
     if (errors.stats.count > 0) json << ",\n  \"single_frame_error_m\": " << errors.json();
   }

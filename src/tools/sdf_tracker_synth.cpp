@@ -24,11 +24,16 @@ Renders an analytic indoor scene along a scripted camera path, in TUM layout
   --no-noise         exact depth, no Kinect-like noise, dropouts or quantisation
   --disparity-subpixels N   disparity quantisation steps per pixel (default 8; 0 = none)
   --noise-scale S    scale of the axial Gaussian noise (default 1)
+  --odometry         also write odometry.txt: the camera's poses as a robot's wheel odometry would
+                     report them (each metre 2 % too long, the heading drifting 1 degree per metre,
+                     noise), for sdf_tracker_offline --odometry
 )";
 
 int run(int argc, char** argv) {
   using namespace sdf_tracker;
-  const tools::CommandLine args(argc, argv, {"output", "motion", "frames", "seed", "size", "disparity-subpixels", "noise-scale"}, {"no-noise", "bare-walls", "help"});
+  const tools::CommandLine args(argc, argv,
+                                {"output", "motion", "frames", "seed", "size", "disparity-subpixels", "noise-scale"},
+                                {"no-noise", "bare-walls", "odometry", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
     return 0;
@@ -50,6 +55,10 @@ int run(int argc, char** argv) {
     if (x == std::string::npos) throw std::invalid_argument("--size: expected WxH like 320x240, got \"" + size + "\"");
     spec.camera = PinholeCamera::tumFreiburg1().scaledTo(parseInteger("--size", size.substr(0, x)),
                                                          parseInteger("--size", size.substr(x + 1)));
+  }
+  if (args.has("odometry")) {
+    spec.odometry = synthetic::WheelOdometryModel{};
+    spec.odometry->seed = spec.seed;
   }
   spec.noise.enabled = !args.has("no-noise");
   spec.noise.disparity_subpixels = args.getInt("disparity-subpixels", spec.noise.disparity_subpixels);

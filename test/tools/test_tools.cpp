@@ -12,6 +12,8 @@
 #include <sstream>
 
 #include "sdf_tracker/cli/command_line.h"
+#include "sdf_tracker/cli/odometry_track.h"
+#include "sdf_tracker/cli/option_values.h"
 #include "sdf_tracker/cli/output_folder.h"
 #include "sdf_tracker/cli/report.h"
 #include "sdf_tracker/io/depth_png.h"
@@ -64,6 +66,58 @@ TEST(CommandLine, WholeNumbersBeyondIntAreRefused) {
   const char* argv[] = {"tool", "--frames", "1e10"};
   const CommandLine args(3, const_cast<char**>(argv), {"frames"}, {});
   EXPECT_THROW(args.getInt("frames", 0), std::invalid_argument);
+}
+
+TEST(OptionValues, EachValueIsReadWholeOrRefusedNamingTheOptionAndTheText) {
+  using namespace sdf_tracker::tools;
+  const Eigen::Isometry3d pose = parsePose("--initial-pose", "0.5,0,-1,0,0,0.7071068,0.7071068");
+  EXPECT_TRUE(pose.translation().isApprox(Eigen::Vector3d(0.5, 0, -1)));
+  EXPECT_NEAR(Eigen::AngleAxisd(pose.linear()).angle(), M_PI / 2, 1e-6);
+  auto refusal = [](const auto& parse) -> std::string {
+    try {
+      parse();
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  EXPECT_NE(refusal([] { parsePose("--initial-pose", "0,0,0,0,0,0,2"); }).find("--initial-pose 0,0,0,0,0,0,2: the quaternion"),
+            std::string::npos);
+  EXPECT_NE(refusal([] { parsePose("--initial-pose", "1,2,3"); }).find("expected TX,TY,TZ,QX,QY,QZ,QW"),
+            std::string::npos);
+  EXPECT_NE(refusal([] { parseBox("--volume-region", "0,0,0,-1,1,1"); }).find("--volume-region: expected"),
+            std::string::npos) << "X0 < X1";
+  EXPECT_NE(refusal([] { parseNumberList("--distortion", "0.1,x"); }).find("--distortion"), std::string::npos);
+  const sdf_tracker::PinholeCamera camera =
+      parseIntrinsics("--intrinsics", "500,501,320,240,320,240", sdf_tracker::PinholeCamera::tumFreiburg1());
+  EXPECT_EQ(camera.width, 320);
+  EXPECT_DOUBLE_EQ(camera.fy, 501.0);
+  EXPECT_NE(refusal([] { parseIntrinsics("--intrinsics", "500,501,320,240,3.5,240", {}); }).find("the width W"),
+            std::string::npos);
+}
+
+TEST(OdometryTrack, PosesBetweenTheRecordedOnesAreInterpolatedAndGapsAndBadFilesAreNot) {
+  const std::string path = ::testing::TempDir() + "/sdf_tracker_odometry.txt";
+  Eigen::Isometry3d turned = Eigen::Isometry3d::Identity();
+  turned.linear() = Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  turned.translation() = Eigen::Vector3d(0.1, 0.0, 0.0);
+  sdf_tracker::io::writeTrajectory(path, {{1.0, Eigen::Isometry3d::Identity()}, {1.04, turned}, {2.0, turned}});
+  const auto track = sdf_tracker::tools::OdometryTrack::read(path);
+  const std::optional<Eigen::Isometry3d> middle = track.at(1.01);
+  ASSERT_TRUE(middle);
+  EXPECT_NEAR(middle->translation().x(), 0.025, 1e-6);
+  EXPECT_NEAR(Eigen::AngleAxisd(middle->linear()).angle(), 0.05, 1e-6);
+  EXPECT_TRUE(track.at(1.04)->isApprox(turned, 1e-6)) << "a recorded stamp gives its pose";
+  EXPECT_FALSE(track.at(1.5)) << "0.96 s between two poses says nothing about the motion";
+  EXPECT_FALSE(track.at(0.9)) << "before the first pose";
+  sdf_tracker::io::writeTrajectory(path, {{1.0, turned}, {0.5, turned}});
+  try {
+    sdf_tracker::tools::OdometryTrack::read(path);
+    ADD_FAILURE() << "stamps that go back were accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--odometry " + path + ": the stamps do not increase"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(Offline, AnImageSizeNoIntHoldsIsRefusedByName) {

@@ -26,6 +26,9 @@ std::string formatAccuracy(const Accuracy& accuracy);
 void writeAccuracyPlot(const std::string& path, const Accuracy& accuracy, const std::string& title);
 
 /// JSON text of a string (quoted, escaped) and of a number (null when not finite).
+/// The q-quantile (0..1) of `values`, the nearest rank; 0 for none.
+double percentile(std::vector<double> values, double q);
+
 std::string jsonString(const std::string& text);
 std::string jsonNumber(double value);
 

@@ -82,6 +82,8 @@ struct FrameReport {
   bool initialised_map = false;  ///< the frame started (or restarted) the map
   bool fused = false;
   bool reset = false;  ///< the map was cleared before this frame after repeated failures
+  /// The pose was predicted from the other odometry's motion (processFrame's T_odom_C).
+  bool predicted_by_odometry = false;
   double tracking_ms = 0.0;
   double fusion_ms = 0.0;
   /// Blocks read back from the swap file before tracking, and written to it after fusion
@@ -111,9 +113,14 @@ class SdfPipeline {
   /// Tracks and fuses one depth image (metres) taken at `timestamp_s` (any clock; frames must come
   /// in time order; NaN: evenly spaced frames). Bad input yields a report with kBadInput; the map
   /// and pose are then untouched. The camera must match the image size; its lens distortion, if
-  /// any, is removed from the image first.
+  /// any, is removed from the image first. `T_odom_C`, when another odometry runs beside the
+  /// tracker (a robot's wheels): the camera's pose in that odometry's frame at this image. The
+  /// motion it measured since the frame whose pose the pipeline holds then predicts the pose
+  /// (instead of constant velocity, and across failed frames too), and stays the estimate along
+  /// the directions the view does not constrain.
   FrameReport processFrame(const DepthImage& depth, const PinholeCamera& camera,
-                           double timestamp_s = std::numeric_limits<double>::quiet_NaN());
+                           double timestamp_s = std::numeric_limits<double>::quiet_NaN(),
+                           const std::optional<Eigen::Isometry3d>& T_odom_C = std::nullopt);
 
   /// Measures the tracker alone: tracks the frame from the given pose T_W_C (e.g. the true one),
   /// reports where the tracker took it, and then fuses the frame at the given pose, whatever the
@@ -176,7 +183,8 @@ class SdfPipeline {
  private:
   /// processFrame, or with given_T_W_C processFrameAtPose.
   FrameReport process(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s,
-                      const std::optional<Eigen::Isometry3d>& given_T_W_C);
+                      const std::optional<Eigen::Isometry3d>& given_T_W_C,
+                      const std::optional<Eigen::Isometry3d>& T_odom_C);
   /// The image as the tracker and integrator take it: undistorted, depths out of range removed.
   DepthImage prepareDepth(const DepthImage& depth, const PinholeCamera& camera);
   /// Where the camera should be at `timestamp_s` if it kept its last motion; the last pose when
@@ -209,6 +217,9 @@ class SdfPipeline {
   int consecutive_failures_ = 0;
   /// The last tracked poses, for the prediction; cleared by a failed frame.
   MotionModel motion_;
+  /// The other odometry's camera pose (processFrame's T_odom_C) at the frame whose pose T_W_C_
+  /// holds; none when that frame came without one.
+  std::optional<Eigen::Isometry3d> T_odom_C_held_;
   std::unique_ptr<PlaceMemory> places_;
   std::unique_ptr<Relocaliser> relocaliser_;
   /// The pose is not known at all (loaded map, relocalise()): every frame goes to the search, which

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -9,6 +10,7 @@
 
 #include "sdf_tracker/camera/camera.h"
 #include "sdf_tracker/camera/depth_image.h"
+#include "sdf_tracker/sim/wheel_odometry.h"
 
 /// Analytic indoor scenes rendered along scripted camera paths, with exact ground truth: the
 /// project's own test data and the default sequence of the main job.
@@ -99,6 +101,8 @@ struct SequenceSpec {
   HouseWalls house_walls = HouseWalls::kFurnished;  ///< what the walk's house has on its walls
   PinholeCamera camera = PinholeCamera::tumFreiburg1();
   double depth_factor = 5000.0;
+  /// Also write odometry.txt: the camera's poses as a wheel odometry of this model reports them.
+  std::optional<WheelOdometryModel> odometry;
 };
 
 /// Writes depth/, depth.txt, groundtruth.txt and intrinsics.txt under `directory` (created).
