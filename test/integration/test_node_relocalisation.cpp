@@ -31,34 +31,25 @@ Eigen::Isometry3d trueCameraInMap(double t_s) {
   return sdf_tracker_ros::mapFromOpticalWorld() * T_scene_C(0.0).inverse() * T_scene_C(t_s);
 }
 
-template <typename Service>
-bool call(const std::string& name, Service& service) {
-  for (int attempt = 0; attempt < 3; ++attempt) {
-    if (ros::service::call(name, service)) return true;
-    ros::Duration(0.5).sleep();
-  }
-  return false;
-}
-
 class NodeRelocalisationTest : public NodeTest {
  protected:
   /// A new map from the desk path's first kSearchTime_s at 15 frames a second, saved to `path`
   /// (.sdfmap: with its place memory; .vti: without), then loaded again: the node no longer knows
   /// where the camera is.
   void mapSaveAndLoad(const std::string& path, double first_stamp_s) {
-    ASSERT_TRUE(call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
+    ASSERT_TRUE(callService("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
     for (int i = 0; i <= 15 * kSearchTime_s; ++i) {
       const auto status = publishDeskFrame(first_stamp_s + i / 15.0, i / 15.0);
       ASSERT_EQ(status.status, sdf_tracker::TrackingStatus::OK) << status.status_text;
     }
     sdf_tracker::SavePath save;
     save.request.path = path;
-    ASSERT_TRUE(call("sdf_tracker/save_volume", save));
+    ASSERT_TRUE(callService("sdf_tracker/save_volume", save));
     ASSERT_TRUE(save.response.success) << save.response.message;
     std::cout << "[ figures  ] " << save.response.message << "\n";
     sdf_tracker::SavePath load;
     load.request.path = path;
-    ASSERT_TRUE(call("sdf_tracker/load_volume", load));
+    ASSERT_TRUE(callService("sdf_tracker/load_volume", load));
     ASSERT_TRUE(load.response.success) << load.response.message;
   }
 
@@ -117,7 +108,7 @@ TEST_F(NodeRelocalisationTest, ALoadedMapIsSearchedForTheCameraAndNoPoseGoesOutU
 
   // ~relocalise forgets the pose: the map is searched again, and the camera found again.
   std_srvs::Trigger relocalise;
-  ASSERT_TRUE(call("sdf_tracker/relocalise", relocalise));
+  ASSERT_TRUE(callService("sdf_tracker/relocalise", relocalise));
   EXPECT_TRUE(relocalise.response.success) << relocalise.response.message;
   EXPECT_GE(searchUntilTracked(710.0, kMaxSearchFrames, &last), 2);
   expectTrackedAtTheTruth(last);

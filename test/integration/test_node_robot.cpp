@@ -60,7 +60,7 @@ class NodeRobotTest : public NodeTest {
 };
 
 TEST_F(NodeRobotTest, OdometryCarriesThePoseWithAPositiveDefiniteCovarianceAndTheDiagnosticsSayTracking) {
-  ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
+  ASSERT_TRUE(callService("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
   sdf_tracker::TrackingStatus status;
   for (int i = 0; i < 10; ++i) {
     status = publishDeskFrame(1000.0 + i / 30.0, i / 30.0);
@@ -98,7 +98,7 @@ TEST_F(NodeRobotTest, OdometryCarriesThePoseWithAPositiveDefiniteCovarianceAndTh
 }
 
 TEST_F(NodeRobotTest, AlongASingleWallTheOdometryStatesWhatTheViewDoesNotConstrain) {
-  ASSERT_TRUE(ros::service::call("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
+  ASSERT_TRUE(callService("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
   st::synthetic::NoiseModel exact;
   exact.enabled = false;
   const st::DepthImage wall = st::synthetic::Scene::singleWall().render(kQvga, Eigen::Isometry3d::Identity(), exact, 0);

@@ -9,19 +9,6 @@
 namespace node_test {
 namespace {
 
-/// ros::service::call through a connection of its own, tried again when the connection itself
-/// failed: ROS 1 opens one per call, and one of the CI runs of this test saw such a call fail
-/// with the node up and answering every other. Whether the node did what was asked is in the
-/// response, which the tests check.
-template <typename Service>
-bool callService(const std::string& name, Service& service) {
-  for (int attempt = 0; attempt < 3; ++attempt) {
-    if (ros::service::call(name, service)) return true;
-    ros::Duration(0.5).sleep();
-  }
-  return false;
-}
-
 TEST_F(NodeTest, SaveMeshWritesAPlyThatLoadsBack) {
   ASSERT_TRUE(callService("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
   // Three frames of its own after a reset, whatever ran before.
