@@ -326,10 +326,11 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
   } else {
     const auto start = std::chrono::steady_clock::now();
     // The other odometry's motion since the held pose, else constant velocity.
-    const Eigen::Isometry3d predicted = given_T_W_C                  ? *given_T_W_C
-                                        : T_odom_C && T_odom_C_held_ ? T_W_C_ * (T_odom_C_held_->inverse() * *T_odom_C)
-                                                                     : predictPose(timestamp_s);
     report.predicted_by_odometry = !given_T_W_C && T_odom_C && T_odom_C_held_;
+    const Eigen::Isometry3d predicted = given_T_W_C ? *given_T_W_C
+                                        : report.predicted_by_odometry
+                                            ? T_W_C_ * (T_odom_C_held_->inverse() * *T_odom_C)
+                                            : predictPose(timestamp_s);
     // Swapped blocks the frame may see come back first; the held pose's too, for the retry below.
     restoreNear(predicted, ideal_camera, furthest_m, &report);
     restoreNear(T_W_C_, ideal_camera, furthest_m, &report);

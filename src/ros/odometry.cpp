@@ -50,12 +50,13 @@ Covariance6d grownCovariance(const Covariance6d& covariance, double elapsed_s) {
   return grown;
 }
 
-nav_msgs::Odometry OdometryBuilder::build(double stamp_s, const Eigen::Isometry3d& T_map_body,
+nav_msgs::Odometry OdometryBuilder::build(double stamp_s, const std::string& child_frame_id,
+                                          const Eigen::Isometry3d& T_map_body,
                                           const std::optional<Covariance6d>& covariance) {
   nav_msgs::Odometry odom;
   odom.header.stamp = ros::Time(stamp_s);
   odom.header.frame_id = frame_id_;
-  odom.child_frame_id = child_frame_id_;
+  odom.child_frame_id = child_frame_id;
   odom.pose.pose = toPoseMsg(T_map_body);
 
   Sample sample{stamp_s, T_map_body, Covariance6d::Zero()};

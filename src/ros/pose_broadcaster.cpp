@@ -67,7 +67,7 @@ PoseBroadcaster::PoseBroadcaster(ros::NodeHandle nh, ros::NodeHandle pnh, const 
       path_length_(options.path_length),
       T_map_W_(mapFromOpticalWorld()),
       tf_listener_(tf_buffer_, nh),
-      odometry_(options.frames.map_frame, options.frames.base_frame) {
+      odometry_(options.frames.map_frame) {
   pose_pub_ = pnh.advertise<geometry_msgs::PoseStamped>("pose", 10);
   odom_pub_ = pnh.advertise<nav_msgs::Odometry>("odom", 10);
   path_pub_ = pnh.advertise<nav_msgs::Path>("path", 1, true);
@@ -164,11 +164,10 @@ Eigen::Isometry3d PoseBroadcaster::requestedCameraPose(const geometry_msgs::Pose
   std::lock_guard<std::mutex> lock(mutex_);
   const Eigen::Isometry3d T_map_body_held = T_map_W_ * T_W_C_held * T_base_cam.inverse();
   // A base heads along its x with z up; a camera along its optical z with -y up.
-  const Eigen::Isometry3d T_map_body =
-      on_base ? placedOnPlane(T_map_body_held, Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitZ(),
-                              T_map_requested.translation().x(), T_map_requested.translation().y(), yaw_rad)
-              : placedOnPlane(T_map_body_held, Eigen::Vector3d::UnitZ(), -Eigen::Vector3d::UnitY(),
-                              T_map_requested.translation().x(), T_map_requested.translation().y(), yaw_rad);
+  const Eigen::Vector3d forward = on_base ? Eigen::Vector3d(1, 0, 0) : Eigen::Vector3d(0, 0, 1);
+  const Eigen::Vector3d up = on_base ? Eigen::Vector3d(0, 0, 1) : Eigen::Vector3d(0, -1, 0);
+  const Eigen::Isometry3d T_map_body = placedOnPlane(T_map_body_held, forward, up, T_map_requested.translation().x(),
+                                                     T_map_requested.translation().y(), yaw_rad);
   return T_map_W_.inverse() * T_map_body * T_base_cam;
 }
 
@@ -250,8 +249,7 @@ Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::st
   if (covariance_W) {
     covariance = bodyPoseCovariance(*covariance_W, R_map_W, T_map_base.translation() - T_map_C.translation());
   }
-  odometry_.setChildFrame(base);
-  odom_pub_.publish(odometry_.build(stamp.toSec(), T_map_base, covariance));
+  odom_pub_.publish(odometry_.build(stamp.toSec(), base, T_map_base, covariance));
 
   std::vector<geometry_msgs::TransformStamped> transforms;
   std::string parent = frames_.map_frame;

@@ -223,8 +223,7 @@ void TrackerServer::process(const Frame& frame) {
     ROS_ERROR_THROTTLE(kThrottle_s, "sdf_tracker: dropping a frame from %s: %s", depth_topic_.c_str(), why.c_str());
     status.status = sdf_tracker::TrackingStatus::BAD_INPUT;
     status.status_text = "bad_input: " + why;
-    status_pub_.publish(status);
-    diagnostics_->frameProcessed(status, (ros::Time::now() - image.header.stamp).toSec());
+    publishStatus(status);
   };
 
   st::DepthImage depth;
@@ -265,8 +264,7 @@ void TrackerServer::process(const Frame& frame) {
                           image.header.stamp.toSec(), back_s, last_stamp_.toSec());
         status.status = sdf_tracker::TrackingStatus::BAD_INPUT;
         status.status_text = "bad_input: stamped before the last frame";
-        status_pub_.publish(status);
-        diagnostics_->frameProcessed(status, (ros::Time::now() - image.header.stamp).toSec());
+        publishStatus(status);
         return;
       }
     }
@@ -338,8 +336,7 @@ void TrackerServer::process(const Frame& frame) {
     std::lock_guard<std::mutex> lock(state_.mutex);
     state_.trajectory.push_back({image.header.stamp.toSec(), T_map_C});
   }
-  status_pub_.publish(status);
-  diagnostics_->frameProcessed(status, (ros::Time::now() - image.header.stamp).toSec());
+  publishStatus(status);
 
   if (pose_known && denoised_pub_.getNumSubscribers() > 0) {
     std::lock_guard<std::mutex> lock(state_.mutex);
@@ -354,19 +351,21 @@ void TrackerServer::process(const Frame& frame) {
                     std::accumulate(frame_ms_.begin(), frame_ms_.end(), 0.0) / frame_ms_.size());
 }
 
+void TrackerServer::publishStatus(const sdf_tracker::TrackingStatus& status) {
+  status_pub_.publish(status);
+  diagnostics_->frameProcessed(status, (ros::Time::now() - status.header.stamp).toSec());
+}
+
 void TrackerServer::applyPoseRequest(const geometry_msgs::PoseWithCovarianceStamped& request,
                                      const std::string& image_frame) {
   const std::string topic = initial_pose_sub_.getTopic();
   try {
-    if (!state_.pipeline->config().relocalise) {
-      throw std::runtime_error("a given pose is used once the tracker has verified it, which needs Relocalise (false)");
-    }
     if (request.header.frame_id.empty()) {
       ROS_WARN("sdf_tracker: the pose on %s has no frame_id: taken in ~map_frame '%s'", topic.c_str(),
                poses_->mapFrame().c_str());
     }
     const Eigen::Isometry3d T_W_C = poses_->requestedCameraPose(request, image_frame, state_.pipeline->pose());
-    state_.pipeline->relocalise(T_W_C);
+    state_.pipeline->relocalise(T_W_C);  // throws, naming Relocalise, when it is off
     const Eigen::Vector3d t_map = poses_->T_map_W() * T_W_C.translation();
     ROS_INFO("sdf_tracker: pose from %s: the camera at (%.3f, %.3f, %.3f) m in %s (x, y and yaw given, height and "
              "tilt kept); verifying it before anything is fused",

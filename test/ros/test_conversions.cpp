@@ -309,24 +309,24 @@ TEST(Odometry, TheTrackersCovarianceBecomesTheBodysInRosOrderAlongTheMapAxes) {
 }
 
 TEST(Odometry, TwistFromSuccessivePosesAndAHeldPoseGrowsItsCovariance) {
-  OdometryBuilder builder("map", "base_link");
+  OdometryBuilder builder("map");
   Covariance6d tracked = 1e-6 * Covariance6d::Identity();
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();  // heading map y
-  const nav_msgs::Odometry first = builder.build(10.0, T, tracked);
+  const nav_msgs::Odometry first = builder.build(10.0, "base_link", T, tracked);
   EXPECT_EQ(first.header.frame_id, "map");
   EXPECT_EQ(first.child_frame_id, "base_link");
   EXPECT_DOUBLE_EQ(first.pose.covariance[0], 1e-6);
   EXPECT_GE(first.twist.covariance[0], 1e5) << "no motion is known from one pose";
 
   T.translation() = Eigen::Vector3d(0.05, 0.0, 0.0);  // 5 cm along map x in 0.1 s: to the body's right
-  const nav_msgs::Odometry second = builder.build(10.1, T, tracked);
+  const nav_msgs::Odometry second = builder.build(10.1, "base_link", T, tracked);
   EXPECT_NEAR(second.twist.twist.linear.x, 0.0, 1e-9);
   EXPECT_NEAR(second.twist.twist.linear.y, -0.5, 1e-9) << "the twist is in the child frame";
   EXPECT_NEAR(second.twist.covariance[7], 2e-6 / 0.01, 1e-9) << "two poses' variance over dt^2";
 
   // Tracking failed for half a second: the held pose's covariance grows, never stays small.
-  const nav_msgs::Odometry held = builder.build(10.6, T, std::nullopt);
+  const nav_msgs::Odometry held = builder.build(10.6, "base_link", T, std::nullopt);
   EXPECT_NEAR(held.pose.covariance[0], std::pow(1e-3 + 0.5 * kHeldSpeed_mps, 2), 1e-9);
   EXPECT_NEAR(held.pose.covariance[35], std::pow(1e-3 + 0.5 * kHeldTurnRate_radps, 2), 1e-9);
   EXPECT_GE(held.twist.covariance[0], 1e5);

@@ -36,18 +36,17 @@ Covariance6d grownCovariance(const Covariance6d& covariance, double elapsed_s);
 /// Builds ~odom from successive poses of the body in the map frame.
 class OdometryBuilder {
  public:
-  OdometryBuilder(std::string frame_id, std::string child_frame_id)
-      : frame_id_(std::move(frame_id)), child_frame_id_(std::move(child_frame_id)) {}
+  /// `frame_id`: the map frame the poses are in.
+  explicit OdometryBuilder(std::string frame_id) : frame_id_(std::move(frame_id)) {}
 
-  /// The message for the body at `T_map_body` at `stamp_s`. `covariance` (ROS order, map axes)
+  /// The message for the body `child_frame_id` at `T_map_body` at `stamp_s`. `covariance` (ROS order, map axes)
   /// for a tracked frame; none for a frame whose pose is held (tracking failed): the last tracked
   /// frame's covariance grown by the time since (grownCovariance). The twist is the motion since
   /// the previous message (its covariance the two poses' summed over the time squared); the first
   /// message's, or one after a held frame, says nothing (kUnconstrained* variance).
-  nav_msgs::Odometry build(double stamp_s, const Eigen::Isometry3d& T_map_body,
+  nav_msgs::Odometry build(double stamp_s, const std::string& child_frame_id, const Eigen::Isometry3d& T_map_body,
                            const std::optional<Covariance6d>& covariance);
-  void setChildFrame(const std::string& child_frame_id) { child_frame_id_ = child_frame_id; }
-  /// Forgets the previous pose (after a reset, or a pose found anew).
+  /// Forgets the previous poses (after ~reset or a loaded map).
   void restart() { previous_.reset(); last_tracked_.reset(); }
 
  private:
@@ -56,7 +55,7 @@ class OdometryBuilder {
     Eigen::Isometry3d T_map_body;
     Covariance6d covariance;
   };
-  std::string frame_id_, child_frame_id_;
+  std::string frame_id_;
   std::optional<Sample> previous_;      ///< the last message's
   std::optional<Sample> last_tracked_;  ///< the last tracked frame's
 };

@@ -15,6 +15,7 @@
 #include <sensor_msgs/Image.h>
 
 #include "sdf_tracker/SdfTrackerConfig.h"
+#include "sdf_tracker/TrackingStatus.h"
 #include "sdf_tracker/pipeline/parameters.h"
 #include "sdf_tracker/ros/map_publisher.h"
 #include "sdf_tracker/ros/map_services.h"
@@ -59,6 +60,8 @@ class TrackerServer {
   /// `image_frame`); says in the log what it did, or why the request is ignored. Called by the
   /// frame thread with the state's lock held.
   void applyPoseRequest(const geometry_msgs::PoseWithCovarianceStamped& request, const std::string& image_frame);
+  /// ~status, and the same to the diagnostics.
+  void publishStatus(const sdf_tracker::TrackingStatus& status);
   void checkInputs(const ros::TimerEvent&);
   void reconfigure(sdf_tracker::SdfTrackerConfig& config, uint32_t level);
 
