@@ -89,10 +89,11 @@ size_t countInside(const std::vector<Eigen::Vector3f>& points_C, const Eigen::Is
   return count;
 }
 
-/// Builds the normal equations at pose T_W_C. `footprint_per_depth2` is a pixel's footprint at 1 m
-/// over a voxel face, (stride / f / voxel size)^2: a point at depth z covers that times z^2 faces. The increment is expressed about the camera centre c
+/// Builds the normal equations at pose T_W_C. The increment is expressed about the camera centre c
 /// (world axes), so rotation and translation stay decoupled wherever the volume's origin lies:
-/// d/dxi D(exp(xi) (p - c) + c) = [ (p - c) x grad D ; grad D ].
+/// d/dxi D(exp(xi) (p - c) + c) = [ (p - c) x grad D ; grad D ]. `footprint_per_depth2` is a
+/// pixel's footprint at 1 m over a voxel face, (stride / f / voxel size)^2: a point at depth z
+/// covers that times z^2 faces.
 NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_C, const FieldSampler& field,
                                      float dmax, const Eigen::Isometry3d& T_W_C, float huber_k,
                                      const DepthNoiseModel* noise, bool normalize_by_gradient,
