@@ -309,6 +309,10 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     report.track.status = TrackStatus::kOk;
     report.track.T_W_C = T_W_C_;
     report.track.message = "first frame: map initialised at the start pose";
+    // The map is anchored at this pose: it is known as well as the map can place anything (in
+    // rad for rotations, as about a lever arm of 1 m).
+    report.track.covariance = Eigen::Matrix<double, 6, 6>::Identity() *
+                              std::pow(kSurfaceResolution_voxels * map_->voxelSize(), 2);
     report.initialised_map = true;
   } else if (!given_T_W_C && pose_unknown_) {
     // The pose is not known at all (a loaded map, relocalise()): only a confirmed candidate
@@ -363,6 +367,11 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     if (!given_T_W_C && !found && (!report.track.tracked() || !brief_loss)) {
       ++consecutive_failures_;
       motion_.clear();
+      if (report.predicted_by_odometry) {
+        // The other odometry carries the held pose on (dead reckoning) until the view fits again.
+        T_W_C_ = predicted;
+        T_odom_C_held_ = T_odom_C;
+      }
       return report;  // never fuse on a failed frame
     }
     consecutive_failures_ = 0;

@@ -104,18 +104,25 @@ void PoseBroadcaster::clearPath() {
 bool PoseBroadcaster::mayPublishParentOf(const std::string& child, const std::string& parent) {
   if (refused_children_.count(child)) return false;
   std::string existing;
-  if (tf_buffer_._getParent(child, ros::Time(0), existing) && stripSlash(existing) != parent) {
-    refused_children_.insert(child);
-    ROS_ERROR("sdf_tracker: frame '%s' already has the parent '%s' from another publisher, so this node will not "
-              "publish %s -> %s (a frame must have one parent). Set ~base_frame to the frame this tracker moves "
-              "(e.g. the root of the camera's own chain, such as a robot's base_link or the camera's mount frame): "
-              "the node then publishes %s -> <base_frame> and looks up <base_frame> -> %s in tf. Until then the "
-              "estimate is on ~pose and ~path only.",
-              child.c_str(), stripSlash(existing).c_str(), parent.c_str(), child.c_str(), parent.c_str(),
-              child.c_str());
+  if (!tf_buffer_._getParent(child, ros::Time(0), existing) || stripSlash(existing) == parent) return true;
+  refused_children_.insert(child);
+  existing = stripSlash(existing);
+  if (child == frames_.odom_frame) {
+    ROS_ERROR("sdf_tracker: frame '%s' (~odom_frame) already has the parent '%s' from another publisher, so this node "
+              "will not publish %s -> %s (a frame must have one parent): another localiser (amcl, an EKF in the map "
+              "frame) corrects the odometry already. Run one of them, or leave ~odom_frame empty and feed ~odom to "
+              "that localiser. Until then the estimate is on ~pose, ~path and ~odom only.",
+              child.c_str(), existing.c_str(), parent.c_str(), child.c_str());
     return false;
   }
-  return true;
+  ROS_ERROR("sdf_tracker: frame '%s' already has the parent '%s' from another publisher, so this node will not "
+            "publish %s -> %s (a frame must have one parent). Set ~base_frame to the frame this tracker moves "
+            "(e.g. the root of the camera's own chain, such as a robot's base_link or the camera's mount frame): "
+            "the node then publishes %s -> <base_frame> and looks up <base_frame> -> %s in tf; on a robot whose "
+            "odometry publishes odom -> base_link, set ~odom_frame too. Until then the estimate is on ~pose and "
+            "~path only.",
+            child.c_str(), existing.c_str(), parent.c_str(), child.c_str(), parent.c_str(), child.c_str());
+  return false;
 }
 
 std::string PoseBroadcaster::cameraFrameOf(const std::string& image_frame) const {
@@ -125,6 +132,29 @@ std::string PoseBroadcaster::cameraFrameOf(const std::string& image_frame) const
 Eigen::Isometry3d PoseBroadcaster::T_base_C(const std::string& camera_frame) {
   if (frames_.base_frame.empty() || frames_.base_frame == camera_frame) return Eigen::Isometry3d::Identity();
   return tf2::transformToEigen(tf_buffer_.lookupTransform(frames_.base_frame, camera_frame, ros::Time(0)));
+}
+
+std::optional<Eigen::Isometry3d> PoseBroadcaster::odometryCameraPose(const ros::Time& stamp,
+                                                                     const std::string& image_frame) {
+  if (frames_.odom_frame.empty()) return std::nullopt;
+  const std::string camera_frame = cameraFrameOf(image_frame);
+  const std::string base = frames_.base_frame.empty() ? camera_frame : frames_.base_frame;
+  try {
+    // The odometry at the image's stamp; the camera's mounting as tf has it last (it is rigid,
+    // and chains re-published at the camera's rate would make every frame wait for the next).
+    return tf2::transformToEigen(
+               tf_buffer_.lookupTransform(frames_.odom_frame, base, stamp, ros::Duration(kOdometryWait_s))) *
+           T_base_C(camera_frame);
+  } catch (const tf2::TransformException& e) {
+    ROS_WARN_THROTTLE(kTfWaitThrottle_s,
+                      "sdf_tracker: no odometry for the frame stamped %.3f: tf has no %s -> %s -> %s then (~odom_frame "
+                      "names the robot's odometry, which must publish %s -> %s; without one leave ~odom_frame "
+                      "empty): %s. Such frames are predicted at constant velocity and %s -> %s is not published.",
+                      stamp.toSec(), frames_.odom_frame.c_str(), base.c_str(), camera_frame.c_str(),
+                      frames_.odom_frame.c_str(), base.c_str(), e.what(), frames_.map_frame.c_str(),
+                      frames_.odom_frame.c_str());
+    return std::nullopt;
+  }
 }
 
 Eigen::Isometry3d PoseBroadcaster::requestedCameraPose(const geometry_msgs::PoseWithCovarianceStamped& request,
@@ -173,7 +203,8 @@ Eigen::Isometry3d PoseBroadcaster::requestedCameraPose(const geometry_msgs::Pose
 
 Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::string& image_frame,
                                            const Eigen::Isometry3d& T_W_C,
-                                           const std::optional<Covariance6d>& covariance_W) {
+                                           const std::optional<Covariance6d>& covariance_W,
+                                           const std::optional<Eigen::Isometry3d>& T_odom_C) {
   const std::string camera_frame = cameraFrameOf(image_frame);
   std::unique_lock<std::mutex> lock(mutex_);
   if (!map_frame_fixed_) {
@@ -251,29 +282,26 @@ Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::st
   }
   odom_pub_.publish(odometry_.build(stamp.toSec(), base, T_map_base, covariance));
 
-  std::vector<geometry_msgs::TransformStamped> transforms;
-  std::string parent = frames_.map_frame;
+  // REP 105 on a robot: its odometry owns odom -> base; the correction map -> odom makes
+  // map -> odom -> base -> camera the estimate.
+  std::string parent = frames_.map_frame, child = base;
+  Eigen::Isometry3d T_parent_child = T_map_base;
   if (!frames_.odom_frame.empty()) {
-    if (!mayPublishParentOf(frames_.odom_frame, parent)) return T_map_C;
-    // map -> odom stays the identity: this tracker corrects no drift after the fact.
-    transforms.push_back(tf2::eigenToTransform(Eigen::Isometry3d::Identity()));
-    transforms.back().header.frame_id = parent;
-    transforms.back().child_frame_id = frames_.odom_frame;
-    parent = frames_.odom_frame;
-  }
-  if (base == parent || base == frames_.map_frame) {
-    ROS_ERROR_ONCE("sdf_tracker: the image's frame '%s' is also ~%s: a frame cannot be its own parent, so this node "
-                   "publishes no tf (pose and path go on). Set ~map_frame%s to a frame of its own.",
-                   base.c_str(), base == frames_.map_frame ? "map_frame" : "odom_frame",
-                   base == frames_.map_frame ? "" : " or ~odom_frame");
+    if (!T_odom_C) return T_map_C;  // odometryCameraPose said why
+    child = frames_.odom_frame;
+    T_parent_child = T_map_C * T_odom_C->inverse();
+  } else if (base == frames_.map_frame) {
+    ROS_ERROR_ONCE("sdf_tracker: the image's frame '%s' is also ~map_frame: a frame cannot be its own parent, so this "
+                   "node publishes no tf (pose and path go on). Set ~map_frame to a frame of its own.",
+                   base.c_str());
     return T_map_C;
   }
-  if (!mayPublishParentOf(base, parent)) return T_map_C;
-  transforms.push_back(tf2::eigenToTransform(T_map_base));
-  transforms.back().header.frame_id = parent;
-  transforms.back().child_frame_id = base;
-  for (auto& tf : transforms) tf.header.stamp = stamp;
-  tf_broadcaster_.sendTransform(transforms);
+  if (!mayPublishParentOf(child, parent)) return T_map_C;
+  geometry_msgs::TransformStamped transform = tf2::eigenToTransform(T_parent_child);
+  transform.header.stamp = stamp;
+  transform.header.frame_id = parent;
+  transform.child_frame_id = child;
+  tf_broadcaster_.sendTransform(transform);
   return T_map_C;
 }
 

@@ -107,11 +107,15 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
 
   const auto& v = settings.pipeline.volume;
   const auto& f = options_.frames;
-  ROS_INFO("sdf_tracker: listening on %s (intrinsics from %s); %s; tf %s%s%s -> %s", depth_topic_.c_str(),
+  const std::string base =
+      !f.base_frame.empty() ? f.base_frame : f.camera_frame.empty() ? "<image frame>" : f.camera_frame;
+  const std::string tree = f.odom_frame.empty()
+                               ? f.map_frame + " -> " + base
+                               : f.map_frame + " -> " + f.odom_frame + " (" + f.odom_frame + " -> " + base +
+                                     " from the robot's odometry, also the motion prior)";
+  ROS_INFO("sdf_tracker: listening on %s (intrinsics from %s); %s; tf %s", depth_topic_.c_str(),
            options_.intrinsics_from_parameters ? "parameters" : info_topic_.c_str(), v.describe().c_str(),
-           f.map_frame.c_str(), f.odom_frame.empty() ? "" : " -> ",
-           f.odom_frame.c_str(), f.base_frame.empty() ? (f.camera_frame.empty() ? "<image frame>" : f.camera_frame.c_str())
-                                                      : f.base_frame.c_str());
+           tree.c_str());
 }
 
 TrackerServer::~TrackerServer() { finish(); }
@@ -238,6 +242,9 @@ void TrackerServer::process(const Frame& frame) {
     return drop(mismatch);
   }
 
+  // The robot's odometry at this image (~odom_frame), looked up before the state is locked: it may
+  // wait for tf.
+  const std::optional<Eigen::Isometry3d> T_odom_C = poses_->odometryCameraPose(image.header.stamp, image.header.frame_id);
   st::FrameReport report;
   Eigen::Isometry3d T_W_C;
   bool pose_known = true;
@@ -274,7 +281,7 @@ void TrackerServer::process(const Frame& frame) {
       pose_request.swap(pending_pose_request_);
     }
     if (pose_request) applyPoseRequest(*pose_request, image.header.frame_id);
-    report = state_.pipeline->processFrame(depth, camera, image.header.stamp.toSec());
+    report = state_.pipeline->processFrame(depth, camera, image.header.stamp.toSec(), T_odom_C);
     if (report.track.status == st::TrackStatus::kBadInput) {
       return drop(report.track.message);
     }
@@ -325,6 +332,7 @@ void TrackerServer::process(const Frame& frame) {
   status.tracking_ms = report.tracking_ms;
   status.fusion_ms = report.fusion_ms;
   status.fused = report.fused;
+  status.predicted_by_odometry = report.predicted_by_odometry;
   status.lost = lost_;
 
   // While the camera is searched for in the map, its pose is not known: nothing goes on tf, ~pose,
@@ -332,7 +340,7 @@ void TrackerServer::process(const Frame& frame) {
   if (pose_known) {
     const Eigen::Isometry3d T_map_C = poses_->publish(
         image.header.stamp, image.header.frame_id, T_W_C,
-        t.tracked() ? std::optional<Covariance6d>(t.covariance) : std::nullopt);
+        t.tracked() ? std::optional<Covariance6d>(t.covariance) : std::nullopt, T_odom_C);
     std::lock_guard<std::mutex> lock(state_.mutex);
     state_.trajectory.push_back({image.header.stamp.toSec(), T_map_C});
   }

@@ -6,14 +6,17 @@
 // (tf_bag) instead, and this node re-publishes on /tf:
 //   - the rigid chain (every transform whose parent is not ~ground_truth_parent) unchanged, so the
 //     tracker can look up its camera's mounting on ~base_frame (kinect) and publish map -> kinect;
-//   - the whole tree renamed with ~suffix (world_gt -> kinect_gt -> ... ->
-//     openni_depth_optical_frame_gt), the ground truth to look at;
+//   - the ground truth's tree (~ground_truth_parent and every frame below it) renamed with ~suffix
+//     (world_gt -> kinect_gt -> ... -> openni_depth_optical_frame_gt), the ground truth to look at;
+//     other transforms of the bag (a robot's odometry, odom -> base_link -> kinect) are passed on
+//     only, so that no renamed frame gets a second parent;
 // and once, on /tf_static, map -> world_gt placing the ground truth's camera on the tracker's
 // camera at the first estimate (~estimate, the tracker's ~pose), so both start together.
 // Leading slashes are dropped from every frame id. With ~show_ground_truth false only the chain is
 // passed on.
 
 #include <optional>
+#include <set>
 
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/ros.h>
@@ -37,6 +40,7 @@ class GroundTruthRelay {
     suffix_ = pnh.param<std::string>("suffix", "_gt");
     camera_frame_ = stripSlash(pnh.param<std::string>("camera_frame", "openni_depth_optical_frame"));
     show_ground_truth_ = pnh.param<bool>("show_ground_truth", true);
+    ground_truth_frames_.insert(ground_truth_parent_);
     if (suffix_.empty()) throw std::invalid_argument("~suffix must not be empty: the ground truth needs frames of its own");
     tf_pub_ = nh.advertise<tf2_msgs::TFMessage>("/tf", 100);
     input_sub_ = nh.subscribe("tf_bag", 100, &GroundTruthRelay::onTf, this);
@@ -52,7 +56,8 @@ class GroundTruthRelay {
       tf.header.frame_id = stripSlash(tf.header.frame_id);
       tf.child_frame_id = stripSlash(tf.child_frame_id);
       if (tf.header.frame_id != ground_truth_parent_) out.transforms.push_back(tf);  // the rigid chain
-      if (!show_ground_truth_) continue;
+      if (!show_ground_truth_ || !ground_truth_frames_.count(tf.header.frame_id)) continue;
+      ground_truth_frames_.insert(tf.child_frame_id);
       tf.header.frame_id += suffix_;
       tf.child_frame_id += suffix_;
       out.transforms.push_back(tf);
@@ -82,6 +87,8 @@ class GroundTruthRelay {
   }
 
   std::string ground_truth_parent_, suffix_, camera_frame_;
+  /// ~ground_truth_parent and the frames seen below it: the tree shown renamed.
+  std::set<std::string> ground_truth_frames_;
   bool show_ground_truth_ = true;
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;

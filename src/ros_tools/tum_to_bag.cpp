@@ -9,7 +9,11 @@
 //   /openni_depth_frame -> /openni_depth_optical_frame (and its openni_rgb_* twin) at 30 Hz;
 //   nothing on /tf_static;
 //   /camera/rgb/image_color (rgb8) + /camera/rgb/camera_info when the folder has rgb.txt, and
-//   /imu when it has accelerometer.txt ("timestamp ax ay az", m/s^2, in the depth camera's frame).
+//   /imu when it has accelerometer.txt ("timestamp ax ay az", m/s^2, in the depth camera's frame);
+//   and, beyond the benchmark, a robot's wheel odometry when it has odometry.txt (the camera's poses
+//   in the odometry's frame, as sdf_tracker_synth --odometry writes them): /odom -> /base_link on
+//   /tf at each of its poses, the base being the camera's mount (/base_link -> /kinect, identity,
+//   with the chain), as a robot's odometry publishes it.
 // camera_info holds the sequence's intrinsics; with --openni-default-intrinsics it holds what the
 // benchmark's own bags are expected to hold instead (inferred from the driver, not checked on one):
 // the OpenNI driver's default (fx = fy = 525, the image centre, D all zero), which is not the
@@ -36,6 +40,7 @@
 #include "sdf_tracker/cli/command_line.h"
 #include "sdf_tracker/devices/recording.h"
 #include "sdf_tracker/io/files.h"
+#include "sdf_tracker/io/trajectory_file.h"
 #include "sdf_tracker/io/tum_sequence.h"
 #include "sdf_tracker/pipeline/parameters.h"
 #include "sdf_tracker/ros/conversions.h"
@@ -75,6 +80,9 @@ std::vector<Link> openniChain() {
           {"/openni_camera", "/openni_rgb_frame", translation(0.0, -0.045, 0.0)},
           {"/openni_rgb_frame", "/openni_rgb_optical_frame", bodyFromOptical()}};
 }
+
+/// The camera's mount on a robot whose odometry the bag carries: its base is the mount itself.
+Link robotMount() { return {"/base_link", "/kinect", Eigen::Isometry3d::Identity()}; }
 
 /// /kinect <- /openni_depth_optical_frame through the chain.
 Eigen::Isometry3d kinectFromDepthOptical(const std::vector<Link>& chain) {
@@ -153,8 +161,12 @@ int run(int argc, char** argv) {
 
   const double offset_s = st::devices::rosStampOffset(sequence);
   const double t_end = sequence.timestamp(sequence.size() - 1);
-  const std::vector<Link> chain = openniChain();
+  std::vector<Link> chain = openniChain();
   const Eigen::Isometry3d T_depth_kinect = kinectFromDepthOptical(chain).inverse();
+  const std::string odometry_path = args.positional(0) + "/odometry.txt";
+  const std::vector<st::io::StampedPose> odometry =
+      std::ifstream(odometry_path) ? st::io::readTrajectory(odometry_path) : std::vector<st::io::StampedPose>{};
+  if (!odometry.empty()) chain.push_back(robotMount());
   const auto& gt = sequence.groundTruth();
   const auto colour = readTimedLines(args.positional(0) + "/rgb.txt");
   const auto accelerometer = readTimedLines(args.positional(0) + "/accelerometer.txt");
@@ -175,7 +187,7 @@ int run(int argc, char** argv) {
     bag.open(temporary, rosbag::bagmode::Write);
     auto stamp = [offset_s](double t) { return ros::Time(t + offset_s); };
     // Every stream in time order up to each depth frame, so playback interleaves them as recorded.
-    size_t gt_index = 0, colour_index = 0, accel_index = 0;
+    size_t gt_index = 0, colour_index = 0, accel_index = 0, odometry_index = 0;
     double next_chain_s = std::min(sequence.timestamp(0), gt.empty() ? sequence.timestamp(0) : gt.front().timestamp_s);
     auto writeUpTo = [&](double until_s) {
       while (gt_index < gt.size() && gt[gt_index].timestamp_s <= until_s) {
@@ -184,6 +196,14 @@ int run(int argc, char** argv) {
         tf.transforms.push_back(toTransform(gt[gt_index].T_W_C * T_depth_kinect, t, "/world", "/kinect"));
         bag.write("/tf", t, tf);
         ++gt_index;
+      }
+      while (odometry_index < odometry.size() && odometry[odometry_index].timestamp_s <= until_s) {
+        tf::tfMessage tf;
+        const ros::Time t = stamp(odometry[odometry_index].timestamp_s);
+        tf.transforms.push_back(
+            toTransform(odometry[odometry_index].T_W_C * T_depth_kinect, t, "/odom", robotMount().parent));
+        bag.write("/tf", t, tf);
+        ++odometry_index;
       }
       while (next_chain_s <= until_s) {
         tf::tfMessage tf;
@@ -239,7 +259,9 @@ int run(int argc, char** argv) {
     std::remove(temporary.c_str());
     throw std::runtime_error("cannot move the finished bag to " + out);
   }
-  std::cout << "wrote " << sequence.size() << " frames to " << out;
+  std::cout << "wrote " << sequence.size() << " frames";
+  if (!odometry.empty()) std::cout << " and " << odometry.size() << " wheel odometry poses (/odom -> /base_link)";
+  std::cout << " to " << out;
   if (offset_s != 0.0) std::cout << " (stamps shifted by " << offset_s << " s)";
   std::cout << "\n";
   return 0;

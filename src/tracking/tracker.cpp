@@ -43,13 +43,6 @@ struct NormalEquations {
 #pragma omp declare reduction(sumEquations : NormalEquations : omp_out += omp_in) \
     initializer(omp_priv = NormalEquations())
 
-/// A fitted surface is placed no better than this fraction of a voxel (the map's resolution, its
-/// interpolation and the sensor's quantisation): the floor of a pose's standard deviation along
-/// each constrained direction, in the balanced units (metres at the RMS lever arm for rotations).
-/// On exact synthetic depth the equations alone claim tens of micrometres; the errors measured
-/// there are a millimetre (test_tracker).
-constexpr double kSurfaceResolution_voxels = 0.1;
-
 /// Below this the field is flat (truncated or unresolved) and the point says nothing.
 constexpr float kMinGradientNorm = 0.2f;
 

@@ -18,6 +18,7 @@
 
 #include "sdf_tracker/TrackingStatus.h"
 
+#include "sdf_tracker/cli/odometry_track.h"
 #include "sdf_tracker/devices/recording.h"
 #include "sdf_tracker/eval/evaluation.h"
 #include "sdf_tracker/io/tum_sequence.h"
@@ -51,8 +52,9 @@ class LaunchWatch {
   std::map<std::string, std::set<std::string>> parents;  ///< child frame -> its parents, slashes stripped
   std::vector<io::StampedPose> poses;                     ///< the tracker's estimates, as stamped
   ros::WallTime last_pose_wall;
-  /// Status messages: one per frame the node processed.
+  /// Status messages: one per frame the node processed; those predicted by the robot's odometry.
   size_t statuses = 0;
+  size_t predicted_by_odometry = 0;
   /// The node's counts, as its latest status message gives them.
   uint32_t frames_received = 0;
   uint32_t frames_dropped = 0;
@@ -73,6 +75,7 @@ class LaunchWatch {
   void onStatus(const sdf_tracker::TrackingStatus& msg) {
     std::lock_guard<std::mutex> lock(mutex);
     ++statuses;
+    predicted_by_odometry += msg.predicted_by_odometry;
     frames_received = std::max(frames_received, msg.frames_received);
     frames_dropped = std::max(frames_dropped, msg.frames_dropped);
   }
@@ -80,18 +83,21 @@ class LaunchWatch {
   ros::Subscriber tf_sub_, static_sub_, pose_sub_, status_sub_;
 };
 
-/// The node's poses against the offline pipeline's (default preset) on the same sequence: prints
-/// both ATEs after `label` and checks the node tracked at least `min_fraction` of the frames and
-/// is within `max_ate_difference_m` of the offline ATE. The node's stamps are the sequence's,
-/// shifted as the converters shift them (devices::rosStampOffset).
+/// The node's poses against the offline pipeline's (default preset) on the same sequence, with the
+/// same `odometry` as the prediction when it has one: prints both ATEs after `label` and checks the
+/// node tracked at least `min_fraction` of the frames and is within `max_ate_difference_m` of the
+/// offline ATE. The node's stamps are the sequence's, shifted as the converters shift them
+/// (devices::rosStampOffset).
 inline void expectOfflineAccuracy(const TumSequence& sequence, const std::vector<io::StampedPose>& node_poses,
-                                  const std::string& label, double min_fraction, double max_ate_difference_m) {
+                                  const std::string& label, double min_fraction, double max_ate_difference_m,
+                                  const tools::OdometryTrack* odometry = nullptr) {
   const double offset_s = devices::rosStampOffset(sequence);
   std::vector<io::StampedPose> node_trajectory = node_poses, offline_trajectory;
   for (auto& pose : node_trajectory) pose.timestamp_s -= offset_s;
   SdfPipeline offline(preset("default").pipeline);
   for (size_t i = 0; i < sequence.size(); ++i) {
-    offline.processFrame(sequence.depth(i), sequence.camera(), sequence.timestamp(i));
+    offline.processFrame(sequence.depth(i), sequence.camera(), sequence.timestamp(i),
+                         odometry ? odometry->at(sequence.timestamp(i)) : std::nullopt);
     offline_trajectory.push_back({sequence.timestamp(i), offline.pose()});
   }
   const double node_ate = evaluation::computeAte(node_trajectory, sequence.groundTruth()).translation_m.rmse;

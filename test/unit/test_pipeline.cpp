@@ -57,6 +57,20 @@ TEST(Pipeline, BadFramesLeaveMapAndPoseUntouched) {
   EXPECT_TRUE(pipeline.pose().isApprox(Eigen::Isometry3d::Identity()));
 }
 
+TEST(Pipeline, TheFirstFrameAnchorsTheMapWithTheSmallestCovarianceNotNone) {
+  Settings settings = preset("default");
+  settings.pipeline.volume.dims = Eigen::Vector3i(64, 64, 64);
+  settings.pipeline.volume.voxel_size_m = 0.04;
+  SdfPipeline pipeline(settings.pipeline);
+  const PinholeCamera camera = test::testCamera();
+  const FrameReport first = pipeline.processFrame(DepthImage(camera.width, camera.height, 1.0f), camera);
+  ASSERT_TRUE(first.initialised_map);
+  // An EKF takes no zero covariance: the pose the map is anchored at is as certain as the map.
+  const double floor = std::pow(kSurfaceResolution_voxels * 0.04, 2);
+  EXPECT_TRUE(first.track.covariance.isApprox(Eigen::Matrix<double, 6, 6>::Identity() * floor, 1e-6))
+      << first.track.covariance;
+}
+
 TEST(Pipeline, LiveUpdatesValidateAndRefuseGridChanges) {
   Settings settings = preset("default");
   settings.pipeline.volume.dims = Eigen::Vector3i(32, 32, 32);
@@ -125,6 +139,32 @@ TEST(Pipeline, ALostCameraHoldsItsPoseFusesNothingAndRelocalisesWhenItSeesTheMap
       T_scene_W.inverse() * synthetic::cameraPose(synthetic::Motion::kDesk, (10 + resumed_at) * kFramePeriod_s,
                                                   kDeskDuration_s);
   EXPECT_LT((pipeline.pose().translation() - truth.translation()).norm(), 0.01);
+}
+
+TEST(Pipeline, WhileFramesFailTheHeldPoseMovesOnWithTheOtherOdometry) {
+  SdfPipeline pipeline(smallRoomPipeline());
+  const PinholeCamera camera = test::testCamera();
+  auto truthAt = [](int i) { return synthetic::cameraPose(synthetic::Motion::kDesk, i * kFramePeriod_s, kDeskDuration_s); };
+  // The other odometry's frame is the scene's; it measures the true motion.
+  int i = 0;
+  for (; i < 10; ++i) {
+    ASSERT_TRUE(pipeline.processFrame(test::renderRoom(truthAt(i), camera), camera, i * kFramePeriod_s, truthAt(i))
+                    .track.ok()) << i;
+  }
+  const Eigen::Isometry3d T_W_scene = pipeline.pose() * truthAt(i - 1).inverse();
+  // The view is blocked (every frame fails) while the robot drives on 2 cm a frame.
+  const Eigen::Isometry3d away = test::perturbed(truthAt(i), 0.5, 70.0 * M_PI / 180.0);
+  Eigen::Isometry3d T_scene_C = truthAt(i - 1);
+  for (int k = 0; k < 5; ++k, ++i) {
+    T_scene_C.translation().x() += 0.02;
+    const FrameReport report =
+        pipeline.processFrame(test::renderRoom(away, camera), camera, i * kFramePeriod_s, T_scene_C);
+    ASSERT_FALSE(report.track.tracked()) << "frame " << i;
+    EXPECT_TRUE(report.predicted_by_odometry);
+    EXPECT_FALSE(report.fused);
+  }
+  EXPECT_LT((pipeline.pose().translation() - (T_W_scene * T_scene_C).translation()).norm(), 1e-9)
+      << "the held pose follows the odometry, 10 cm on";
 }
 
 TEST(Pipeline, AfterResetAfterFailuresFailedFramesANewMapStartsWhereTheCameraWasHeld) {

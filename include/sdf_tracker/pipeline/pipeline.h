@@ -116,8 +116,9 @@ class SdfPipeline {
   /// any, is removed from the image first. `T_odom_C`, when another odometry runs beside the
   /// tracker (a robot's wheels): the camera's pose in that odometry's frame at this image. The
   /// motion it measured since the frame whose pose the pipeline holds then predicts the pose
-  /// (instead of constant velocity, and across failed frames too), and stays the estimate along
-  /// the directions the view does not constrain.
+  /// (instead of constant velocity), and stays the estimate along the directions the view does not
+  /// constrain; on a frame that fails, the held pose moves on by that motion (dead reckoning), so
+  /// that pose() follows the robot until the view fits again.
   FrameReport processFrame(const DepthImage& depth, const PinholeCamera& camera,
                            double timestamp_s = std::numeric_limits<double>::quiet_NaN(),
                            const std::optional<Eigen::Isometry3d>& T_odom_C = std::nullopt);

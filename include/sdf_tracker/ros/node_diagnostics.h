@@ -17,8 +17,9 @@ namespace sdf_tracker_ros {
 ///   latency from an image's stamp to its pose; ERROR when no frame came for kStaleAfter_s, WARN
 ///   while more than half of the camera's frames are dropped.
 /// - "<node>: tracking": the last status and failures in a row, at the level the log uses: OK
-///   when tracked, WARN for a frame that failed (or a search under way), ERROR once tracking is
-///   lost (~status's `lost`).
+///   when tracked (a degenerate view too, when the robot's odometry gave what it leaves open),
+///   WARN for a frame that failed, a degenerate one without odometry, or a search under way,
+///   ERROR once tracking is lost (~status's `lost`).
 class NodeDiagnostics {
  public:
   static constexpr double kStaleAfter_s = 3.0;

@@ -15,7 +15,9 @@ namespace sdf_tracker_ros {
 /// Frame names per REP 105, without leading slashes.
 struct FrameOptions {
   std::string map_frame = "map";
-  std::string odom_frame;    ///< optional: map -> odom (identity) -> base
+  /// Optional: the robot's odometry frame (REP 105). The robot's odometry owns odom -> base; its
+  /// motion between two images is the tracker's prediction, and the node publishes map -> odom.
+  std::string odom_frame;
   std::string base_frame;    ///< optional: the body the tracker moves; base -> camera comes from tf
   std::string camera_frame;  ///< empty: the depth image's frame_id
 };

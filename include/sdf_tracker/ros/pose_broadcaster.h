@@ -48,8 +48,10 @@ constexpr double kMaxGravityReading = 30.0;
 bool isGravityReading(const Eigen::Vector3d& acceleration);
 
 /// Puts the tracker's estimate on the tf tree the user already has (REP 105): publishes
-/// map -> [odom ->] base, where base is ~base_frame (its mounting base -> camera looked up in tf)
-/// or else the camera frame itself, so that map -> camera is the estimate. It never gives a frame a
+/// map -> base, where base is ~base_frame (its mounting base -> camera looked up in tf) or else the
+/// camera frame itself, so that map -> camera is the estimate. With ~odom_frame the robot's
+/// odometry owns odom -> base, and it publishes the correction map -> odom instead, so that
+/// map -> odom -> base -> camera is the estimate. It never gives a frame a
 /// second parent: when the frame it would publish already has another parent, it says once which
 /// frame, which parent and which parameter to set, and publishes no tf (pose and path go on).
 /// Also publishes ~pose, a bounded ~path and ~odom (nav_msgs/Odometry of the base, with
@@ -58,11 +60,19 @@ class PoseBroadcaster {
  public:
   PoseBroadcaster(ros::NodeHandle nh, ros::NodeHandle pnh, const NodeOptions& options);
 
+  /// With ~odom_frame: the camera's pose in the robot's odometry frame at `stamp` (odom -> base
+  /// from the robot's odometry, base -> camera its mounting, through tf), waiting up to
+  /// kOdometryWait_s for it. None without ~odom_frame, or, said in the log, while tf lacks it.
+  std::optional<Eigen::Isometry3d> odometryCameraPose(const ros::Time& stamp, const std::string& image_frame);
+  static constexpr double kOdometryWait_s = 0.1;
+
   /// The estimate T_W_C (tracker world <- camera optical frame) for an image of `image_frame`
   /// (its frame_id) at `stamp`, with its covariance (TrackResult::covariance) when the frame was
-  /// tracked, none when the pose is held. Returns the camera's pose in the map frame.
+  /// tracked, none when the pose is held, and the camera's pose in the robot's odometry frame at
+  /// that stamp (odometryCameraPose) when there is one. Returns the camera's pose in the map frame.
   Eigen::Isometry3d publish(const ros::Time& stamp, const std::string& image_frame, const Eigen::Isometry3d& T_W_C,
-                            const std::optional<Covariance6d>& covariance_W);
+                            const std::optional<Covariance6d>& covariance_W,
+                            const std::optional<Eigen::Isometry3d>& T_odom_C);
 
   /// The camera pose T_W_C that a pose request on ~initialpose means, for images of `image_frame`
   /// while the tracker holds `T_W_C_held`: x, y and yaw of the request (in its header's frame,
