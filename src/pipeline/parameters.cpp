@@ -316,6 +316,12 @@ std::vector<ParameterSpec> buildTable() {
                           "start tracking from a constant-velocity prediction scaled to the time since the last frame",
                           {}, {true, false, false}, kLive, kAll,
                           [](auto& s) -> auto& { return s.pipeline.predict_motion; }));
+  t.push_back(bound<double>("OdometryError", "",
+                            "a robot's odometry beside the tracker (the node's ~odom_frame, offline --odometry): "
+                            "the standard deviation of its motion between two frames, a fraction of the distance "
+                            "and angle travelled",
+                            closed(1e-4, 1.0), same(0.05), kLive, kAll,
+                            [](auto& s) -> auto& { return s.pipeline.odometry_error; }));
   t.push_back(bound<int>("ResetAfterFailures", "frames", "clear the map after this many failed frames in a row; 0 never",
                          closed(0, 1e6), same(0), kLive, kAll,
                          [](auto& s) -> auto& { return s.pipeline.reset_after_failures; }));

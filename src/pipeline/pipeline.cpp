@@ -17,6 +17,10 @@ namespace {
 
 /// Failed frames after which a fit from the held pose is no longer taken without confirmation.
 constexpr int kBriefLossFrames = 2;
+/// Along directions a degenerate view does not constrain, each such frame keeps this part of the
+/// predicted motion: the motion decays (to half in 7 frames) instead of persisting, and all of
+/// it adds up to no more than nine frames' worth.
+constexpr double kUnobservedMotionKept = 0.9;
 
 double millisecondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -75,6 +79,7 @@ std::vector<std::string> PipelineConfig::validate() const {
   }
   v.requireNonNegative("reset_after_failures", reset_after_failures);
   v.requirePositive("max_prediction_gap_s", max_prediction_gap_s);
+  v.requireInRange("odometry_error", odometry_error, 1e-4, 1.0);
   if (volume.positive_truncation_m > 0.0 && integrator.negative_truncation_m < 0.0) {
     // The tracker needs samples on both sides of the surface: at least one voxel each way.
     std::ostringstream s;
@@ -179,6 +184,18 @@ DepthImage SdfPipeline::prepareDepth(const DepthImage& depth, const PinholeCamer
     if (!(z[i] >= lo && z[i] <= hi)) z[i] = 0.0f;  // NaN fails both comparisons
   }
   return filtered;
+}
+
+MotionPrior::Odometry odometryPrior(const Eigen::Isometry3d& T_W_C_predicted, const Eigen::Isometry3d& motion,
+                                    double odometry_error) {
+  const double distance_m = motion.translation().norm();
+  MotionPrior::Odometry prior;
+  prior.T_W_C = T_W_C_predicted;
+  prior.sigma << Eigen::Vector3d::Constant(
+      std::max(odometry_error * rotationAngle(motion) + kOdometryHeadingDrift_rad_per_m * distance_m,
+               kMinOdometrySigma_rad)),
+      Eigen::Vector3d::Constant(std::max(odometry_error * distance_m, kMinOdometrySigma_m));
+  return prior;
 }
 
 Eigen::Isometry3d SdfPipeline::predictPose(double timestamp_s) const {
@@ -338,10 +355,16 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     // Swapped blocks the frame may see come back first; the held pose's too, for the retry below.
     restoreNear(predicted, ideal_camera, furthest_m, &report);
     restoreNear(T_W_C_, ideal_camera, furthest_m, &report);
-    report.track = tracker_->track(filtered, ideal_camera, *map_, predicted);
+    MotionPrior prior;
+    if (report.predicted_by_odometry) {
+      prior.odometry = odometryPrior(predicted, T_odom_C_held_->inverse() * *T_odom_C, config_.odometry_error);
+    } else if (!given_T_W_C) {
+      prior.T_W_C_unconstrained = T_W_C_ * expSe3(kUnobservedMotionKept * logSe3(T_W_C_.inverse() * predicted));
+    }
+    report.track = tracker_->track(filtered, ideal_camera, *map_, predicted, prior);
     if (!given_T_W_C && !report.track.tracked() && !predicted.isApprox(T_W_C_)) {
       // The prediction may have led astray (the camera stopped or turned): try from the last pose.
-      TrackResult from_last = tracker_->track(filtered, ideal_camera, *map_, T_W_C_);
+      TrackResult from_last = tracker_->track(filtered, ideal_camera, *map_, T_W_C_, prior);
       if (from_last.tracked()) report.track = std::move(from_last);
     }
     report.tracking_ms = millisecondsSince(start);

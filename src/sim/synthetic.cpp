@@ -246,7 +246,8 @@ Scene Scene::house(HouseWalls walls) {
 Scene Scene::forMotion(Motion motion, HouseWalls walls) {
   switch (motion) {
     case Motion::kPlanar: return singleWall();
-    case Motion::kWalk: return house(walls);
+    case Motion::kWalk:
+    case Motion::kCorridor: return house(walls);
     default: return indoorRoom();
   }
 }
@@ -337,10 +338,11 @@ DepthImage Scene::render(const PinholeCamera& camera, const Eigen::Isometry3d& T
 }
 
 Motion parseMotion(const std::string& name) {
-  for (Motion m : {Motion::kDesk, Motion::kSlow, Motion::kFast, Motion::kPlanar, Motion::kLoop, Motion::kWalk}) {
+  for (Motion m : {Motion::kDesk, Motion::kSlow, Motion::kFast, Motion::kPlanar, Motion::kLoop, Motion::kWalk,
+                   Motion::kCorridor}) {
     if (toString(m) == name) return m;
   }
-  throw std::invalid_argument("unknown motion \"" + name + "\" (known: desk, slow, fast, planar, loop, walk)");
+  throw std::invalid_argument("unknown motion \"" + name + "\" (known: desk, slow, fast, planar, loop, walk, corridor)");
 }
 
 std::string toString(Motion motion) {
@@ -351,6 +353,7 @@ std::string toString(Motion motion) {
     case Motion::kPlanar: return "planar";
     case Motion::kLoop: return "loop";
     case Motion::kWalk: return "walk";
+    case Motion::kCorridor: return "corridor";
   }
   return "unknown";
 }
@@ -423,10 +426,39 @@ Eigen::Isometry3d walkPose(double t_s) {
   return lookAt(eye, eye + forward, 0.03 * std::sin(0.9 * t_s));
 }
 
+/// The corridor drive: down the house's corridor (x from 0.8 to 11.2 m, 1 m from either wall),
+/// turning on the spot at each end, back, and again; the camera 0.4 m above the floor looks 50
+/// degrees to the left of the way the robot drives and 8 degrees down, and shakes by 2 mm.
+Eigen::Isometry3d corridorPose(double t_s) {
+  constexpr double kFromX = 0.8, kToX = 11.2, kZ = 1.0, kTurn_s = 4.0;
+  constexpr double kEyeY = kFloorY - 0.4;  // the vertical is -y
+  constexpr double kSideways_rad = 50.0 * M_PI / 180.0, kDown_rad = 8.0 * M_PI / 180.0;
+  const double leg_s = (kToX - kFromX) / kWalkSpeed_m_s;
+  const double t = std::fmod(std::max(t_s, 0.0), 2.0 * (leg_s + kTurn_s));
+  auto eased = [](double f) { return f * f * (3.0 - 2.0 * f); };  // turns start and end at rest
+  double x, heading_rad;  // heading 0: along +x
+  if (t < leg_s) {
+    x = kFromX + kWalkSpeed_m_s * t, heading_rad = 0.0;
+  } else if (t < leg_s + kTurn_s) {
+    x = kToX, heading_rad = M_PI * eased((t - leg_s) / kTurn_s);
+  } else if (t < 2.0 * leg_s + kTurn_s) {
+    x = kToX - kWalkSpeed_m_s * (t - leg_s - kTurn_s), heading_rad = M_PI;
+  } else {
+    x = kFromX, heading_rad = M_PI + M_PI * eased((t - 2.0 * leg_s - kTurn_s) / kTurn_s);
+  }
+  // With y down, the robot's left of heading +x is +z.
+  const double look_rad = heading_rad + kSideways_rad;
+  const Eigen::Vector3d forward(std::cos(look_rad) * std::cos(kDown_rad), std::sin(kDown_rad),
+                                std::sin(look_rad) * std::cos(kDown_rad));
+  const Eigen::Vector3d eye(x, kEyeY + 0.002 * std::sin(2.0 * M_PI * 3.0 * t_s), kZ);
+  return lookAt(eye, eye + forward, 0.0);
+}
+
 }  // namespace
 
 Eigen::Isometry3d cameraPose(Motion motion, double t_s, double duration_s) {
   if (motion == Motion::kWalk) return walkPose(t_s);
+  if (motion == Motion::kCorridor) return corridorPose(t_s);
   if (motion == Motion::kPlanar) {
     // Facing the wall 2 m away, sliding sideways and up/down: nothing fixes x, y or the roll.
     return lookAt({0.6 * std::sin(0.5 * t_s), 0.2 * std::sin(0.8 * t_s), 0.0},
@@ -457,7 +489,7 @@ void writeSequence(const std::string& directory, const SequenceSpec& spec) {
   std::ostringstream depth_list, ground_truth, intrinsics;
   depth_list << "# synthetic depth (sdf_tracker), motion " << toString(spec.motion) << ", noise "
              << (spec.noise.enabled ? "on" : "off") << ", seed " << spec.seed
-             << (spec.motion == Motion::kWalk && spec.house_walls == HouseWalls::kBare ? ", bare walls" : "")
+             << (spec.house_walls == HouseWalls::kBare ? ", bare walls" : "")
              << "\n# timestamp filename\n";
   ground_truth << "# exact ground truth, camera to world\n# timestamp tx ty tz qx qy qz qw\n";
   std::vector<io::StampedPose> poses;

@@ -241,7 +241,7 @@ int run(int argc, char** argv) {
   std::string first_unreadable;
   st::tools::ProgressBar progress(sequence.size(), !args.has("quiet"));
   const auto start = std::chrono::steady_clock::now();
-  std::vector<double> single_frame_errors_m;  // --fuse-ground-truth
+  std::vector<double> single_frame_errors_m, single_frame_mahalanobis;  // --fuse-ground-truth
   std::vector<double> search_ms;              // frames spent searching for the camera (Relocalise)
   size_t relocalisations = 0, predicted_by_odometry = 0;
   size_t without_ground_truth = 0;
@@ -290,7 +290,9 @@ int run(int argc, char** argv) {
     // The estimate: with --fuse-ground-truth, where the tracker took the frame, not the fused pose.
     trajectory.push_back({sequence.timestamp(i), true_T_W_C.empty() ? pipeline.pose() : t.T_W_C});
     if (!true_T_W_C.empty() && !report.initialised_map && t.tracked()) {
-      single_frame_errors_m.push_back((t.T_W_C.translation() - true_T_W_C[i]->translation()).norm());
+      const Eigen::Vector3d error_m = t.T_W_C.translation() - true_T_W_C[i]->translation();
+      single_frame_errors_m.push_back(error_m.norm());
+      single_frame_mahalanobis.push_back(st::tools::squaredMahalanobisOfPosition(error_m, t.covariance));
     }
     double cast_ms = 0.0;
     if (args.has("raycast")) {
@@ -417,7 +419,7 @@ int run(int argc, char** argv) {
        << ", \"ms_max\": " << jsonNumber(st::tools::percentile(search_ms, 1.0))
        << ", \"keyframes\": " << pipeline.places().keyframes().size() << "}";
   if (!true_T_W_C.empty()) {
-    const st::tools::SingleFrameErrors errors(single_frame_errors_m);
+    const st::tools::SingleFrameErrors errors(single_frame_errors_m, single_frame_mahalanobis);
     summary << errors.summaryLine(without_ground_truth);
     if (errors.stats.count > 0) json << ",\n  \"single_frame_error_m\": " << errors.json();
   }

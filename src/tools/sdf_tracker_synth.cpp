@@ -15,7 +15,9 @@ Renders an analytic indoor scene along a scripted camera path, in TUM layout
 
   --output DIR       folder to write (created)
   --motion NAME      desk (default) | slow | fast | planar | loop | walk (through a house, 0.5 m/s)
-  --bare-walls       walk only: bare walls, but for six pictures in the corridor (default: a picture
+                     | corridor (a robot down the house's corridor and back at 0.5 m/s, its camera
+                     0.4 m high looking 50 degrees to the side)
+  --bare-walls       walk and corridor: bare walls, but for six pictures in the corridor (default: a picture
                      or a shelf every metre of every wall); close to a bare wall the view holds one
                      plane, which depth alone cannot place
   --frames N         number of frames (default 300, at 30 Hz)
@@ -43,8 +45,8 @@ int run(int argc, char** argv) {
   spec.frames = args.getInt("frames", 300);
   spec.seed = static_cast<uint32_t>(args.getInt("seed", 1));
   if (args.has("bare-walls")) {
-    if (spec.motion != synthetic::Motion::kWalk) {
-      throw std::invalid_argument("--bare-walls: only the walk goes through the house (got --motion " +
+    if (spec.motion != synthetic::Motion::kWalk && spec.motion != synthetic::Motion::kCorridor) {
+      throw std::invalid_argument("--bare-walls: only the walk and the corridor go through the house (got --motion " +
                                   synthetic::toString(spec.motion) + ")");
     }
     spec.house_walls = synthetic::HouseWalls::kBare;

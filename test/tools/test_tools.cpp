@@ -16,6 +16,7 @@
 #include "sdf_tracker/cli/option_values.h"
 #include "sdf_tracker/cli/output_folder.h"
 #include "sdf_tracker/cli/report.h"
+#include "sdf_tracker/cli/tracker_alone.h"
 #include "sdf_tracker/io/depth_png.h"
 #include "sdf_tracker/io/files.h"
 #include "sdf_tracker/io/sdfmap_file.h"
@@ -120,6 +121,20 @@ TEST(OdometryTrack, PosesBetweenTheRecordedOnesAreInterpolatedAndGapsAndBadFiles
   }
 }
 
+TEST(TrackerAlone, AnErrorCountsAsWithinTwoSigmaByTheCovarianceOfItsDirection) {
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Identity();
+  covariance.bottomRightCorner<3, 3>().diagonal() << 1e-6, 1e-6, 1e-2;  // 1 mm across, 10 cm along z
+  EXPECT_NEAR(squaredMahalanobisOfPosition(Eigen::Vector3d(0.002, 0.0, 0.0), covariance), 4.0, 1e-9);
+  EXPECT_NEAR(squaredMahalanobisOfPosition(Eigen::Vector3d(0.0, 0.0, 0.2), covariance), 4.0, 1e-9);
+  EXPECT_TRUE(std::isinf(squaredMahalanobisOfPosition(Eigen::Vector3d(0.0, 0.0, 0.2),
+                                                      Eigen::Matrix<double, 6, 6>::Zero())))
+      << "no covariance stated: no error is within it";
+  const SingleFrameErrors errors({0.001, 0.002, 0.003, 0.2}, {1.0, 4.0, 9.0, kTwoSigmaSquared3d});
+  EXPECT_EQ(errors.within_two_sigma, 3u);
+  EXPECT_NE(errors.summaryLine(0).find("within the stated covariance's 2 sigma: 75 %"), std::string::npos)
+      << errors.summaryLine(0);
+}
+
 TEST(Offline, AnImageSizeNoIntHoldsIsRefusedByName) {
   const ToolRun run = offline("--sequence " + shortSequence(2) + " --output " + test::scratchDirectory("huge") +
                               " --intrinsics 585,585,320,240,1e20,1e20");
@@ -198,7 +213,8 @@ TEST(Offline, FuseGroundTruthMeasuresTheTrackerAloneAndNeedsGroundTruth) {
   EXPECT_NE(run.output.find("tracker alone (--fuse-ground-truth): translation error per frame (mm) mean "),
             std::string::npos)
       << run.output;
-  EXPECT_NE(run.output.find("over 1 cm: 0 of 7 frames"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("over 1 cm: 0 of 7 frames; within the stated covariance's 2 sigma: "), std::string::npos)
+      << run.output;
   std::ifstream json(out + "/summary.json");
   const std::string summary((std::istreambuf_iterator<char>(json)), std::istreambuf_iterator<char>());
   EXPECT_NE(summary.find("\"single_frame_error_m\""), std::string::npos) << summary;

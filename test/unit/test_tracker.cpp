@@ -274,6 +274,54 @@ TEST_F(WallFixture, ASinglePlaneIsSolvedInTheThreeDirectionsItConstrains) {
   EXPECT_TRUE(plain.T_W_C.isApprox(guess));
 }
 
+TEST_F(WallFixture, OnASinglePlaneTheOdometryGivesWhatTheWallLeavesOpenAndTheMapTheRest) {
+  // The wheels put the camera 2 cm off along the wall, 1.5 cm off across it and turned 1 degree
+  // towards it; the guess is theirs.
+  MotionPrior prior;
+  prior.odometry.emplace();
+  prior.odometry->T_W_C = T_W_C;
+  prior.odometry->T_W_C.translation() += Eigen::Vector3d(0.02, 0.0, 0.015);
+  prior.odometry->T_W_C.linear() = Eigen::AngleAxisd(0.0175, Eigen::Vector3d::UnitY()).toRotationMatrix() * T_W_C.linear();
+  prior.odometry->sigma << Eigen::Vector3d::Constant(1e-3), Eigen::Vector3d::Constant(1e-3);
+  TrackerConfig config;
+  config.solve_constrained_directions = true;
+  const TrackResult result = Tracker(config).track(wall, camera, volume, prior.odometry->T_W_C, prior);
+  EXPECT_TRUE(result.tracked()) << result.message;
+  EXPECT_EQ(result.status, TrackStatus::kDegenerate);
+  EXPECT_NE(result.message.find("the others follow the odometry"), std::string::npos) << result.message;
+  // What the wall sees, the map sets: distance and tilt.
+  const Eigen::Vector3d normal_C = result.T_W_C.linear().transpose() * Eigen::Vector3d::UnitZ();
+  EXPECT_NEAR(result.T_W_C.translation().z(), T_W_C.translation().z(), 0.002);
+  EXPECT_LT(std::acos(std::min(1.0, normal_C.z())), 0.003);
+  // What it does not, the wheels keep.
+  EXPECT_NEAR(result.T_W_C.translation().x(), T_W_C.translation().x() + 0.02, 0.002);
+  EXPECT_NEAR(result.T_W_C.translation().y(), T_W_C.translation().y(), 0.002);
+  // Without SolveConstrainedDirections (the paper) the odometry still estimates the frame.
+  config.solve_constrained_directions = false;
+  EXPECT_TRUE(Tracker(config).track(wall, camera, volume, prior.odometry->T_W_C, prior).tracked());
+}
+
+TEST_F(WallFixture, WithoutOdometryADegenerateFrameGoesWhereItIsToldAlongWhatTheWallLeavesOpen) {
+  // The guess is a constant-velocity prediction 3 cm along the wall and 1 cm too close: the wall
+  // sees the distance, nothing sees the slide, so the camera stays where it was along the wall.
+  MotionPrior prior;
+  prior.T_W_C_unconstrained = T_W_C;
+  Eigen::Isometry3d guess = T_W_C;
+  guess.translation() += Eigen::Vector3d(0.03, -0.01, 0.01);
+  TrackerConfig config;
+  config.solve_constrained_directions = true;
+  const TrackResult result = Tracker(config).track(wall, camera, volume, guess, prior);
+  EXPECT_TRUE(result.tracked()) << result.message;
+  EXPECT_NE(result.message.find("the others keep a decaying part of the predicted motion"), std::string::npos)
+      << result.message;
+  EXPECT_NEAR(result.T_W_C.translation().z(), T_W_C.translation().z(), 0.002) << "the distance is fitted";
+  EXPECT_NEAR(result.T_W_C.translation().x(), T_W_C.translation().x(), 0.002) << "no slide from the prediction";
+  EXPECT_NEAR(result.T_W_C.translation().y(), T_W_C.translation().y(), 0.002);
+  // Without a held pose the prediction is kept, as before.
+  const TrackResult predicted = Tracker(config).track(wall, camera, volume, guess);
+  EXPECT_NEAR(predicted.T_W_C.translation().x(), T_W_C.translation().x() + 0.03, 0.002);
+}
+
 TEST(Tracker, ConstrainedDirectionsChangeNothingWhereTheGeometryConstrainsAll) {
   const PinholeCamera camera = test::testCamera();
   const Eigen::Isometry3d T_W_C = synthetic::cameraPose(synthetic::Motion::kDesk, 0.0, 10.0);

@@ -49,6 +49,10 @@ struct PipelineConfig {
   bool predict_motion = false;
   /// No prediction across a gap longer than this [s]: the last motion says little by then.
   double max_prediction_gap_s = 0.5;
+  /// How far another odometry (processFrame's T_odom_C) is trusted: the standard deviation of the
+  /// motion it measures between two frames, as a fraction of the distance and of the angle
+  /// travelled (wheels: a few per cent), no less than kMinOdometrySigma_m / _rad per frame.
+  double odometry_error = 0.05;
   /// Sparse map only: above this many MiB, blocks away from the camera are swapped to disk (see
   /// MapMemoryBudget); 0 never.
   double max_map_memory_mb = 0.0;
@@ -64,6 +68,19 @@ struct PipelineConfig {
 
   std::vector<std::string> validate() const;
 };
+
+/// Another odometry's standard deviation per frame is no less than this: one that says the robot
+/// stood still is not believed beyond it, so that the map can still correct the pose.
+constexpr double kMinOdometrySigma_m = 5e-4;
+constexpr double kMinOdometrySigma_rad = 5e-4;
+/// Its heading errs by about a degree per metre driven (wheels of unequal size, slip).
+constexpr double kOdometryHeadingDrift_rad_per_m = 0.02;
+
+/// The prior another odometry gives a frame (MotionPrior::Odometry): the pose it predicts, with a
+/// standard deviation of `odometry_error` of the distance and angle of the `motion` it measured
+/// since the held frame (plus the heading drift over that distance), at least the floors above.
+MotionPrior::Odometry odometryPrior(const Eigen::Isometry3d& T_W_C_predicted, const Eigen::Isometry3d& motion,
+                                    double odometry_error);
 
 /// A frame that went to the relocaliser (FrameReport::relocalisation).
 struct RelocalisationReport {

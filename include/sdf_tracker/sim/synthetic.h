@@ -84,6 +84,9 @@ enum class Motion {
   kPlanar,  ///< sliding along a single wall: degenerate geometry
   kLoop,    ///< a closed circle around the desk, ending where it started
   kWalk,    ///< walking at 0.5 m/s through the house: along the corridor and round every room
+  kCorridor,  ///< a robot driving at 0.5 m/s down the house's corridor and back, its camera 0.4 m
+              ///< above the floor looking 50 degrees to the side: the floor and a wall, whose length
+              ///< only the pictures, cabinets and doors on it place
 };
 Motion parseMotion(const std::string& name);  ///< throws std::invalid_argument
 std::string toString(Motion motion);
@@ -98,7 +101,7 @@ struct SequenceSpec {
   double rate_hz = 30.0;
   NoiseModel noise;
   uint32_t seed = 1;
-  HouseWalls house_walls = HouseWalls::kFurnished;  ///< what the walk's house has on its walls
+  HouseWalls house_walls = HouseWalls::kFurnished;  ///< what the house has on its walls (walk, corridor)
   PinholeCamera camera = PinholeCamera::tumFreiburg1();
   double depth_factor = 5000.0;
   /// Also write odometry.txt: the camera's poses as a wheel odometry of this model reports them.

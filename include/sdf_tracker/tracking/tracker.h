@@ -1,5 +1,6 @@
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -121,6 +122,25 @@ struct TrackResult {
   bool tracked() const { return ok() || (status == TrackStatus::kDegenerate && pose_estimated); }
 };
 
+/// What is known of the frame's pose besides its image.
+struct MotionPrior {
+  /// Another odometry's pose for this frame (a robot's wheels) with its standard deviations
+  /// [rotation (rad); translation (m)] about the camera centre along the world's axes: a Gaussian
+  /// prior that each Gauss-Newton step weighs against the map's normal equations (those scaled by
+  /// their residual variance). Where the view constrains the pose the map wins; along a bare wall
+  /// or a corridor the odometry does.
+  struct Odometry {
+    Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+    Eigen::Matrix<double, 6, 1> sigma = Eigen::Matrix<double, 6, 1>::Ones();
+  };
+  std::optional<Odometry> odometry;
+  /// Without odometry: where the estimate goes along the directions a degenerate view does not
+  /// constrain, instead of following the guess (SdfPipeline: the last pose moved on by a part of
+  /// the constant-velocity prediction that shrinks with every such frame, so that the motion along
+  /// directions nothing observes decays instead of persisting).
+  std::optional<Eigen::Isometry3d> T_W_C_unconstrained;
+};
+
 /// Registers a depth image directly against the TSDF (Section III): Gauss-Newton on the sum of
 /// squared field values at the transformed points, Huber IRLS, growing Tikhonov regularisation,
 /// coarse-to-fine pixel strides. Stateless apart from its config; thread safe.
@@ -132,7 +152,7 @@ class Tracker {
   const TrackerConfig& config() const { return config_; }
 
   TrackResult track(const DepthImage& depth, const PinholeCamera& camera, const TsdfMap& map,
-                    const Eigen::Isometry3d& T_W_C_guess) const;
+                    const Eigen::Isometry3d& T_W_C_guess, const MotionPrior& prior = {}) const;
 
  private:
   TrackerConfig config_;
