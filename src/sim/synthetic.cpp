@@ -426,11 +426,11 @@ Eigen::Isometry3d walkPose(double t_s) {
   return lookAt(eye, eye + forward, 0.03 * std::sin(0.9 * t_s));
 }
 
-/// The corridor drive: down the house's corridor (x from 0.8 to 11.2 m, 1 m from either wall),
+/// The corridor drive: down the house's corridor (x from 0.8 to 10.4 m, 1 m from either wall),
 /// turning on the spot at each end, back, and again; the camera 0.4 m above the floor looks 50
 /// degrees to the left of the way the robot drives and 8 degrees down, and shakes by 2 mm.
 Eigen::Isometry3d corridorPose(double t_s) {
-  constexpr double kFromX = 0.8, kToX = 11.2, kZ = 1.0, kTurn_s = 4.0;
+  constexpr double kFromX = 0.8, kToX = 10.4, kZ = 1.0, kTurn_s = 6.0;  // short of the cabinet at x = 11.25
   constexpr double kEyeY = kFloorY - 0.4;  // the vertical is -y
   constexpr double kSideways_rad = 50.0 * M_PI / 180.0, kDown_rad = 8.0 * M_PI / 180.0;
   const double leg_s = (kToX - kFromX) / kWalkSpeed_m_s;
