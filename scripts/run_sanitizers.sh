@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The core's unit tests (test_core: test/unit/) and the tools' tests (test_tools: test/tools/),
 # built and run here only, under AddressSanitizer + UndefinedBehaviorSanitizer, and every
-# reader's fuzz target for FUZZ_SECONDS (default 20) from its committed corpus (test/fuzz/corpus/). Whole sequences (test/sequences/) and the ROS tests run in the
+# reader's fuzz target for FUZZ_SECONDS (default 12) from its committed corpus (test/fuzz/corpus/). Whole sequences (test/sequences/) and the ROS tests run in the
 # release build (scripts/run_tests.sh). Builds in build/sanitize (plain CMake, no ROS). Results go
 # to RESULTS_DIR (default build/sanitize/results) as JUnit XML, which run_tests.sh counts.
 #   scripts/run_sanitizers.sh
@@ -9,7 +9,7 @@ set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="$repo/build/sanitize"
 results="${RESULTS_DIR:-$build/results}"
-seconds="${FUZZ_SECONDS:-20}"
+seconds="${FUZZ_SECONDS:-12}"
 # Ninja, as the release build (scripts/build.sh); a folder configured by make is configured again.
 if [ -f "$build/CMakeCache.txt" ] && ! grep -q "^CMAKE_GENERATOR:INTERNAL=Ninja$" "$build/CMakeCache.txt"; then
   rm -rf "$build"

@@ -94,7 +94,7 @@ TEST(OdometryPrior, AWheelOdometryHoldsWhatASingleWallLeavesOpen) {
 TEST(OdometryPrior, DownABareCorridorTheWheelsGiveItsLengthAndTheViewTheRest) {
   // A robot drives down the corridor, its camera on the floor and one wall, which place
   // everything but the way along the corridor; pictures, cabinets and doors come by now and then.
-  const Drive d = drive(synthetic::Motion::kCorridor, synthetic::HouseWalls::kBare, 450, true, 5);
+  const Drive d = drive(synthetic::Motion::kCorridor, synthetic::HouseWalls::kBare, 330, true, 5);
   print("corridor, bare walls", d);
   EXPECT_EQ(d.lost_with, 0);
   EXPECT_LT(d.with_m, 0.03);
