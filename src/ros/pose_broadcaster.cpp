@@ -284,22 +284,22 @@ Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::st
 
   // REP 105 on a robot: its odometry owns odom -> base; the correction map -> odom makes
   // map -> odom -> base -> camera the estimate.
-  std::string parent = frames_.map_frame, child = base;
-  Eigen::Isometry3d T_parent_child = T_map_base;
+  std::string child = base;
+  Eigen::Isometry3d T_map_child = T_map_base;
   if (!frames_.odom_frame.empty()) {
     if (!T_odom_C) return T_map_C;  // odometryCameraPose said why
     child = frames_.odom_frame;
-    T_parent_child = T_map_C * T_odom_C->inverse();
+    T_map_child = T_map_C * T_odom_C->inverse();
   } else if (base == frames_.map_frame) {
     ROS_ERROR_ONCE("sdf_tracker: the image's frame '%s' is also ~map_frame: a frame cannot be its own parent, so this "
                    "node publishes no tf (pose and path go on). Set ~map_frame to a frame of its own.",
                    base.c_str());
     return T_map_C;
   }
-  if (!mayPublishParentOf(child, parent)) return T_map_C;
-  geometry_msgs::TransformStamped transform = tf2::eigenToTransform(T_parent_child);
+  if (!mayPublishParentOf(child, frames_.map_frame)) return T_map_C;
+  geometry_msgs::TransformStamped transform = tf2::eigenToTransform(T_map_child);
   transform.header.stamp = stamp;
-  transform.header.frame_id = parent;
+  transform.header.frame_id = frames_.map_frame;
   transform.child_frame_id = child;
   tf_broadcaster_.sendTransform(transform);
   return T_map_C;

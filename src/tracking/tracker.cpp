@@ -208,19 +208,16 @@ Vector6d incrementTo(const Eigen::Isometry3d& T_W_C_target, const Eigen::Isometr
 /// does not.
 Vector6d stepWithOdometry(const NormalEquations& eq, double alpha, const MotionPrior::Odometry& odometry,
                           const Eigen::Isometry3d& T_W_C) {
-  // The data term without its weakest directions (scaled eigenvalues under
-  // kMinInverseConditionBesideOdometry of the largest): there the noise of a plain surface (and
-  // the depth quantisation's stripes, which move with the camera) would pull the pose back to
-  // where the map was last fused, against the odometry.
+  // The data term restricted to its constrained directions at kMinInverseConditionBesideOdometry:
+  // along weaker ones the noise of a plain surface (and the depth quantisation's stripes, which
+  // move with the camera) would pull the pose back to where the map was last fused, against the
+  // odometry. In the scaled space the data term is V diag(eigenvalues) V^T.
   const ScaledEquations scaled = scaleEquations(eq);
-  const Vector6d& ev = scaled.eigen.eigenvalues();
-  const Matrix6d& V = scaled.eigen.eigenvectors();
-  Vector6d kept = Vector6d::Zero();
-  for (int i = 0; i < 6; ++i) kept(i) = ev(i) >= kMinInverseConditionBesideOdometry * ev(5) ? 1.0 : 0.0;
-  const Matrix6d keep = V * kept.asDiagonal() * V.transpose();  // projector in the scaled space
+  const int rank = scaled.constrainedRank(kMinInverseConditionBesideOdometry);
+  const Eigen::MatrixXd V = scaled.eigen.eigenvectors().rightCols(rank);
   const Matrix6d S = scaled.scale.asDiagonal(), S_inverse = scaled.scale.cwiseInverse().asDiagonal();
-  const Matrix6d H = S_inverse * keep * (S * eq.H * S) * keep * S_inverse;
-  const Vector6d g = S_inverse * keep * (S * eq.g);
+  const Matrix6d H = S_inverse * V * scaled.eigen.eigenvalues().tail(rank).asDiagonal() * V.transpose() * S_inverse;
+  const Vector6d g = S_inverse * V * (V.transpose() * (S * eq.g));
   const double scale = dataVarianceScale(eq);
   const Vector6d information = odometry.sigma.array().square().inverse();
   const Matrix6d A = (H + alpha * Matrix6d::Identity()) / scale + Matrix6d(information.asDiagonal());

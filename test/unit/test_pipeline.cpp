@@ -40,11 +40,18 @@ TEST(FrameMemory, AFrameSizedBufferComesFromTheHeapAndStaysAfterItIsFreed) {
 }
 #endif
 
+constexpr double kCoarseVoxel_m = 0.04;
+
+/// The default preset on a coarse 64^3 grid: enough where what the frames show does not matter.
+PipelineConfig coarseGridPipeline() {
+  PipelineConfig config = preset("default").pipeline;
+  config.volume.dims = Eigen::Vector3i(64, 64, 64);
+  config.volume.voxel_size_m = kCoarseVoxel_m;
+  return config;
+}
+
 TEST(Pipeline, BadFramesLeaveMapAndPoseUntouched) {
-  Settings settings = preset("default");
-  settings.pipeline.volume.dims = Eigen::Vector3i(64, 64, 64);
-  settings.pipeline.volume.voxel_size_m = 0.04;
-  SdfPipeline pipeline(settings.pipeline);
+  SdfPipeline pipeline(coarseGridPipeline());
   const PinholeCamera camera = test::testCamera();
   const FrameReport wrong_size = pipeline.processFrame(DepthImage(640, 480, 1.0f), camera);
   EXPECT_EQ(wrong_size.track.status, TrackStatus::kBadInput);
@@ -58,15 +65,12 @@ TEST(Pipeline, BadFramesLeaveMapAndPoseUntouched) {
 }
 
 TEST(Pipeline, TheFirstFrameAnchorsTheMapWithTheSmallestCovarianceNotNone) {
-  Settings settings = preset("default");
-  settings.pipeline.volume.dims = Eigen::Vector3i(64, 64, 64);
-  settings.pipeline.volume.voxel_size_m = 0.04;
-  SdfPipeline pipeline(settings.pipeline);
+  SdfPipeline pipeline(coarseGridPipeline());
   const PinholeCamera camera = test::testCamera();
   const FrameReport first = pipeline.processFrame(DepthImage(camera.width, camera.height, 1.0f), camera);
   ASSERT_TRUE(first.initialised_map);
   // An EKF takes no zero covariance: the pose the map is anchored at is as certain as the map.
-  const double floor = std::pow(kSurfaceResolution_voxels * 0.04, 2);
+  const double floor = std::pow(kSurfaceResolution_voxels * kCoarseVoxel_m, 2);
   EXPECT_TRUE(first.track.covariance.isApprox(Eigen::Matrix<double, 6, 6>::Identity() * floor, 1e-6))
       << first.track.covariance;
 }
