@@ -83,8 +83,10 @@ void NodeDiagnostics::tracking(diagnostic_updater::DiagnosticStatusWrapper& stat
   stat.add("prediction", last_.predicted_by_odometry ? "the robot's odometry" : "constant velocity");
   if (last_.lost) {
     stat.summary(DiagnosticStatus::ERROR, "lost: " + last_.status_text);
-  } else if (last_.status == sdf_tracker::TrackingStatus::DEGENERATE && last_.fused && last_.predicted_by_odometry) {
-    // A robot along a bare wall: what the view leaves open, its odometry gives.
+  } else if (last_.status == sdf_tracker::TrackingStatus::DEGENERATE && last_.consecutive_failures == 0 &&
+             last_.predicted_by_odometry) {
+    // A robot along a bare wall, tracked (no failure counted; fused or not, as MinPoseChangeToFuseData
+    // says): what the view leaves open, its odometry gives.
     stat.summaryf(DiagnosticStatus::OK, "tracking: %d of 6 directions from the view, the others from the odometry",
                   last_.constrained_rank);
   } else if (last_.status != sdf_tracker::TrackingStatus::OK) {
