@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The core's unit tests (test_core: test/unit/) and the tools' tests (test_tools: test/tools/),
 # built and run here only, under AddressSanitizer + UndefinedBehaviorSanitizer, and every
-# reader's fuzz target for FUZZ_SECONDS (default 12) from its committed corpus (test/fuzz/corpus/). Whole sequences (test/sequences/) and the ROS tests run in the
-# release build (scripts/run_tests.sh). Builds in build/sanitize (plain CMake, no ROS). Results go
-# to RESULTS_DIR (default build/sanitize/results) as JUnit XML, which run_tests.sh counts.
+# reader's fuzz target for FUZZ_SECONDS (default 12) from its committed corpus (test/fuzz/corpus/).
+# Whole sequences (test/sequences/) and the ROS tests run in the release build
+# (scripts/run_tests.sh). Builds in build/sanitize (plain CMake, no ROS). Results go to RESULTS_DIR
+# (default build/sanitize/results) as JUnit XML, which run_tests.sh counts.
 #   scripts/run_sanitizers.sh
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

@@ -215,7 +215,8 @@ Vector6d stepWithOdometry(const NormalEquations& eq, double alpha, const MotionP
   // odometry. In the scaled space the data term is V diag(eigenvalues) V^T.
   const ScaledEquations scaled = scaleEquations(eq);
   const int rank = scaled.constrainedRank(kMinInverseConditionBesideOdometry);
-  const Eigen::MatrixXd V = scaled.eigen.eigenvectors().rightCols(rank);
+  // At most six columns: no heap allocation per Gauss-Newton iteration.
+  const Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, 6> V = scaled.eigen.eigenvectors().rightCols(rank);
   const Matrix6d S = scaled.scale.asDiagonal(), S_inverse = scaled.scale.cwiseInverse().asDiagonal();
   const Matrix6d H = S_inverse * V * scaled.eigen.eigenvalues().tail(rank).asDiagonal() * V.transpose() * S_inverse;
   const Vector6d g = S_inverse * V * (V.transpose() * (S * eq.g));
