@@ -111,7 +111,8 @@ struct TrackResult {
   /// about the camera centre along the world's axes (rad^2, m^2; T = Tr(c) exp(xi) Tr(-c) T_W_C),
   /// from the last iteration's normal equations scaled by their residual variance, at least a
   /// tenth of a voxel of standard deviation along every constrained direction. Along
-  /// directions the view does not constrain (constrained_rank < 6) the variance is
+  /// directions the view does not constrain (constrained_rank < 6), and along those too weak to
+  /// hold against another odometry (a plain wall's noise), the variance is
   /// kUnconstrainedVariance. Zero when nothing was estimated.
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
   std::string message;      ///< why, in words, when status != kOk.
