@@ -58,6 +58,14 @@ class LaunchWatch {
   /// The node's counts, as its latest status message gives them.
   uint32_t frames_received = 0;
   uint32_t frames_dropped = 0;
+  /// The same counts in the first status message seen: the node may have taken a frame or two
+  /// before this subscriber's connection stood, and their statuses never reached it.
+  uint32_t first_frames_received = 0;
+  uint32_t first_frames_dropped = 0;
+
+  /// Frames the node received, and dropped, from the first status seen on (call with `mutex` held).
+  uint32_t framesReceivedWhileWatched() const { return statuses > 0 ? frames_received - first_frames_received + 1 : 0; }
+  uint32_t framesDroppedWhileWatched() const { return frames_dropped - first_frames_dropped; }
 
  private:
   void onTf(const tf2_msgs::TFMessage& msg) {
@@ -74,7 +82,10 @@ class LaunchWatch {
 
   void onStatus(const sdf_tracker::TrackingStatus& msg) {
     std::lock_guard<std::mutex> lock(mutex);
-    ++statuses;
+    if (statuses++ == 0) {
+      first_frames_received = msg.frames_received;
+      first_frames_dropped = msg.frames_dropped;
+    }
     predicted_by_odometry += msg.predicted_by_odometry;
     frames_received = std::max(frames_received, msg.frames_received);
     frames_dropped = std::max(frames_dropped, msg.frames_dropped);
