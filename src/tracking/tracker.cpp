@@ -44,14 +44,14 @@ struct NormalEquations {
     initializer(omp_priv = NormalEquations())
 
 /// Beside another odometry, directions whose scaled eigenvalue is under this fraction of the
-/// largest are left to it, and the covariance states them unconstrained (an EKF's other inputs
-/// are such odometries), twice the default MinInverseCondition: on a plain wall with Kinect
+/// largest are left to it (twice the default MinInverseCondition), and the covariance states them
+/// unconstrained, as an EKF's other inputs are such odometries. On a plain wall with Kinect
 /// noise (bench/odometry_prior.sh, VGA) the weakest direction's ratio, noise alone, is under 9e-4
 /// in 90 % of frames but up to 2e-2 in a few. Measured on QVGA drives with wheel odometry (ATE with
 /// 2e-3, 3e-3, 5e-3, 1e-2): corridor 1.1, 1.7, 2.0, 21.7 cm; walk, bare walls 1.3, 0.9, 0.7, 0.7 cm;
 /// single wall 0.6, 0.9, 0.9, 0.9 cm; furnished walk 0.75 cm throughout. Covariances stated with
 /// it rather than MinInverseCondition (frames tracked from their true poses, within the two-sigma
-/// ellipsoid): single wall 69 % instead of 32 %, the others unchanged (95-99 %); no frame of
+/// ellipsoid): single wall 69 % instead of 32 %, the other drives 96-99 % (95-98 %); no frame of
 /// fr1_xyz or redkitchen comes under it (their lowest: 2.6e-3, 3.5e-3).
 constexpr double kMinInverseConditionBesideOdometry = 2e-3;
 
@@ -385,9 +385,8 @@ TrackResult Tracker::track(const DepthImage& depth, const PinholeCamera& camera,
     const ScaledEquations scaled = scaleEquations(last);
     result.inverse_condition = scaled.inverseCondition();
     result.constrained_rank = scaled.constrainedRank(config_.min_inverse_condition);
-    const int covariance_rank = std::min(
-        result.constrained_rank,
-        scaled.constrainedRank(std::max(config_.min_inverse_condition, kMinInverseConditionBesideOdometry)));
+    const int covariance_rank =
+        scaled.constrainedRank(std::max(config_.min_inverse_condition, kMinInverseConditionBesideOdometry));
     result.covariance = estimateCovariance(last, scaled, covariance_rank, map.voxelSize());
     if (move_unconstrained && result.constrained_rank < 6) {
       T_W_C = result.T_W_C =

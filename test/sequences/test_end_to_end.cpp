@@ -43,8 +43,8 @@ TEST_P(SyntheticSequence, NoisyDeskLikeMotionIsTrackedWithinTwoAndAHalfMillimetr
   const std::string dir = test::scratchDirectory("e2e_" + synthetic::toString(GetParam()));
   synthetic::SequenceSpec spec;
   spec.motion = GetParam();
-  // The first 6.7 s of the path: at desk speed the eye crosses 0.7 m of the desk and turns back,
-  // at slow speed it covers the first half of that.
+  // The first 6.7 s of the path: at desk speed the eye goes 0.7 m along the desk and back to
+  // 0.1 m, at slow speed only out the 0.7 m.
   spec.frames = 200;
   spec.seed = 7;  // not the seed of the main job's default sequence
   synthetic::writeSequence(dir, spec);
