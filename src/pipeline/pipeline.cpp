@@ -3,6 +3,8 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <iomanip>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -122,6 +124,7 @@ void SdfPipeline::reset() {
   T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   motion_.clear();
   T_odom_C_held_.reset();
+  held_pose_timestamp_s_ = std::numeric_limits<double>::quiet_NaN();
 }
 
 void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemory> places) {
@@ -135,6 +138,7 @@ void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemo
   consecutive_failures_ = 0;
   motion_.clear();
   T_odom_C_held_.reset();
+  held_pose_timestamp_s_ = std::numeric_limits<double>::quiet_NaN();
   relocaliser_->cancel();
   pose_unknown_ = config_.relocalise;
   search_guess_.reset();  // the start pose is tried anyway, as the held pose
@@ -371,7 +375,16 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     // In a brief loss the camera cannot have gone far: a fit from the held pose is taken at once.
     // After a longer one the camera may be anywhere (carried with its view blocked), and a fit
     // there must be confirmed like any candidate: the held pose stays until then.
-    const bool brief_loss = consecutive_failures_ <= kBriefLossFrames || !config_.relocalise;
+    // Frames missing for longer than the prediction bridges count as such a loss too (NaN times:
+    // no gap), unless the other odometry measured the motion across them.
+    const double unseen_s = timestamp_s - held_pose_timestamp_s_;
+    const bool unseen_gap = !report.predicted_by_odometry && unseen_s > config_.max_prediction_gap_s;
+    const bool brief_loss = (consecutive_failures_ <= kBriefLossFrames && !unseen_gap) || !config_.relocalise;
+    if (unseen_gap && report.track.tracked() && config_.relocalise) {
+      std::ostringstream s;
+      s << std::setprecision(3) << unseen_s << " s since the last tracked frame: the held pose's fit must be confirmed";
+      report.track.message = s.str();
+    }
     if (given_T_W_C) {
       T_W_C_ = *given_T_W_C;  // the estimate is reported; the given pose is fused
     } else if (report.track.pose_estimated && brief_loss) {
@@ -400,6 +413,7 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     consecutive_failures_ = 0;
   }
   motion_.addTracked(timestamp_s, T_W_C_);
+  held_pose_timestamp_s_ = timestamp_s;
   T_odom_C_held_ = T_odom_C;
   if (config_.relocalise) places_->offer(filtered, T_W_C_);
 

@@ -145,6 +145,37 @@ TEST(Pipeline, ALostCameraHoldsItsPoseFusesNothingAndRelocalisesWhenItSeesTheMap
   EXPECT_LT((pipeline.pose().translation() - truth.translation()).norm(), 0.01);
 }
 
+TEST(Pipeline, AfterFramesMissingLongerThanThePredictionBridgesTheHeldPosesFitIsConfirmedFirst) {
+  // The camera may have been carried anywhere while no frame came: a fit from the held pose could
+  // be a wrong place that looks alike, so it is followed like any candidate before anything is fused.
+  PipelineConfig config = smallRoomPipeline();
+  config.relocalise = true;
+  SdfPipeline pipeline(config);
+  const PinholeCamera camera = test::testCamera();
+  auto frameAt = [&](int i) {
+    return test::renderRoom(synthetic::cameraPose(synthetic::Motion::kDesk, i * kFramePeriod_s, kDeskDuration_s), camera);
+  };
+  for (int i = 0; i < 10; ++i) ASSERT_TRUE(pipeline.processFrame(frameAt(i), camera, i * kFramePeriod_s).track.ok()) << i;
+  const double gap_s = 2.0 * config.max_prediction_gap_s;
+  double t = 9 * kFramePeriod_s + gap_s;
+  const int confirm = config.relocaliser.confirm_frames;
+  for (int k = 0; k < confirm - 1; ++k, t += kFramePeriod_s) {
+    const FrameReport report = pipeline.processFrame(frameAt(10 + k), camera, t);
+    EXPECT_EQ(report.track.status, TrackStatus::kRelocalising) << "frame " << k << ": " << report.track.message;
+    EXPECT_FALSE(report.fused);
+    EXPECT_NE(report.track.message.find("since the last tracked frame"), std::string::npos) << report.track.message;
+  }
+  const FrameReport found = pipeline.processFrame(frameAt(10 + confirm - 1), camera, t);
+  EXPECT_TRUE(found.track.ok()) << found.track.message;
+  EXPECT_TRUE(found.fused);
+
+  // Frames that come within the gap are taken at once, as before.
+  t += config.max_prediction_gap_s * 0.5;
+  const FrameReport next = pipeline.processFrame(frameAt(10 + confirm), camera, t);
+  EXPECT_TRUE(next.track.ok()) << next.track.message;
+  EXPECT_TRUE(next.fused);
+}
+
 TEST(Pipeline, WhileFramesFailTheHeldPoseMovesOnWithTheOtherOdometry) {
   SdfPipeline pipeline(smallRoomPipeline());
   const PinholeCamera camera = test::testCamera();

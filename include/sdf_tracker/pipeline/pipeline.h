@@ -47,7 +47,11 @@ struct PipelineConfig {
   /// since the last tracked frame, so dropped frames are bridged). When tracking from the
   /// prediction fails, the frame is tracked again from the last pose. Off: from the last pose.
   bool predict_motion = false;
-  /// No prediction across a gap longer than this [s]: the last motion says little by then.
+  /// No prediction across a gap longer than this [s]: the last motion says little by then. With
+  /// relocalise on, a frame taken longer than this after the last tracked one (the view blocked
+  /// while the camera was carried, a recording cut) is treated as after a long loss: the camera
+  /// may be anywhere, and a fit from the held pose must be confirmed like any candidate, unless
+  /// another odometry measured the motion.
   double max_prediction_gap_s = 0.5;
   /// How far another odometry (processFrame's T_odom_C) is trusted: the standard deviation of the
   /// motion it measures between two frames, as a fraction of the distance and of the angle
@@ -235,6 +239,8 @@ class SdfPipeline {
   int consecutive_failures_ = 0;
   /// The last tracked poses, for the prediction; cleared by a failed frame.
   MotionModel motion_;
+  /// When the frame whose pose T_W_C_ holds was taken (NaN: unknown, or frames without times).
+  double held_pose_timestamp_s_ = std::numeric_limits<double>::quiet_NaN();
   /// The other odometry's camera pose (processFrame's T_odom_C) at the frame whose pose T_W_C_
   /// holds; none when that frame came without one.
   std::optional<Eigen::Isometry3d> T_odom_C_held_;
