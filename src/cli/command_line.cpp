@@ -45,7 +45,12 @@ const std::string& CommandLine::positional(size_t i) const {
 
 std::string CommandLine::get(const std::string& name, const std::string& fallback) const {
   auto it = values_.find(name);
-  return it == values_.end() ? fallback : it->second.back();
+  if (it == values_.end()) return fallback;
+  if (it->second.size() > 1 && it->second.front() != it->second.back()) {
+    throw std::invalid_argument("--" + name + " is given twice (\"" + it->second.front() + "\" and \"" +
+                                it->second.back() + "\"): give it once");
+  }
+  return it->second.back();
 }
 
 std::vector<std::string> CommandLine::getAll(const std::string& name) const {

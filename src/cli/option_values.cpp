@@ -10,11 +10,14 @@
 namespace sdf_tracker::tools {
 
 std::vector<double> parseNumberList(const std::string& option, const std::string& text) {
+  // Every field between commas is a number: "1,2," has an empty third one, as ",1,2" a first.
   std::vector<double> values;
-  std::istringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) values.push_back(parseNumber(option, item));
-  return values;
+  for (size_t start = 0;; ) {
+    const size_t comma = text.find(',', start);
+    values.push_back(parseNumber(option, text.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
+    if (comma == std::string::npos) return values;
+    start = comma + 1;
+  }
 }
 
 Eigen::Isometry3d parsePose(const std::string& option, const std::string& text) {

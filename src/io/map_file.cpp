@@ -17,9 +17,16 @@ namespace {
   throwFileError(path, "unknown map file extension (known: .sdfmap, .vti)");
 }
 
+/// A map in which nothing was ever observed cannot be tracked against: the camera would never be
+/// found in it.
+void refuseEmpty(const std::string& path, const TsdfMap& map) {
+  if (map.observesNothing()) throwFileError(path, "an empty map: no voxel holds an observation, nothing to track against");
+}
+
 }  // namespace
 
 void writeMap(const std::string& path, const TsdfMap& map, const PlaceMemory* places) {
+  if (map.observesNothing()) throwFileError(path, "not written: nothing is mapped yet (no voxel holds an observation)");
   if (hasExtension(path, ".sdfmap")) {
     if (map.type() == MapType::kSparse) writeSparseMap(path, static_cast<const SparseTsdfMap&>(map), places);
     else writeSparseMap(path, toSparseMap(map), places);
@@ -36,6 +43,7 @@ std::unique_ptr<TsdfMap> readMap(const std::string& path, bool compact_voxels, s
   if (hasExtension(path, ".sdfmap")) {
     std::optional<SavedPlaces> saved;
     auto map = std::make_unique<SparseTsdfMap>(readSparseMap(path, places ? &saved : nullptr));
+    refuseEmpty(path, *map);
     if (places && saved) {
       PlaceMemoryConfig config = places_config;
       config.descriptor = saved->descriptor;
@@ -45,8 +53,22 @@ std::unique_ptr<TsdfMap> readMap(const std::string& path, bool compact_voxels, s
     }
     return map;
   }
-  if (hasExtension(path, ".vti")) return std::make_unique<TsdfVolume>(readVti(path, compact_voxels));
+  if (hasExtension(path, ".vti")) {
+    auto map = std::make_unique<TsdfVolume>(readVti(path, compact_voxels));
+    refuseEmpty(path, *map);
+    return map;
+  }
   failUnknownMapExtension(path);
+}
+
+std::string describeLoadedPlaces(const PlaceMemory* places, bool relocalise) {
+  std::string held;
+  if (!places) held = "holds no place memory (a .vti, or a .sdfmap of format version 1)";
+  else if (places->empty()) held = "holds a place memory without keyframes (its first session stored none)";
+  else held = "holds " + std::to_string(places->keyframes().size()) + " keyframes in its place memory";
+  if (!relocalise) return held + "; Relocalise is off: tracking starts at the map's start pose";
+  if (!places || places->empty()) return held + ": the camera is searched for from the map's start pose only";
+  return held + ": the camera is searched for in it, and nothing is fused until it is found";
 }
 
 }  // namespace sdf_tracker::io

@@ -94,6 +94,14 @@ TsdfVolume SparseTsdfMap::toDense(const Eigen::Vector3i& first, const Eigen::Vec
   return cropOf(config_, first, dims, [this](const Eigen::Vector3i& index) { return voxel(index); });
 }
 
+bool SparseTsdfMap::observesNothing() const {
+  bool nothing = true;
+  blocks_.forEach([&nothing](uint64_t, const VoxelBlock& block) {
+    nothing = nothing && std::none_of(block.voxels.begin(), block.voxels.end(), [](const Voxel& v) { return v.weight > 0.0f; });
+  });
+  return nothing;
+}
+
 void SparseTsdfMap::clear() {
   blocks_.clear();
   cleared_at_ = ++revision_;

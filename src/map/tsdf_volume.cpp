@@ -20,6 +20,12 @@ TsdfVolume::TsdfVolume(const VolumeConfig& config) : TsdfMap(config, MapType::kD
   clear();
 }
 
+bool TsdfVolume::observesNothing() const {
+  return withStorage([this](const auto* voxels, const auto& codec) {
+    return std::none_of(voxels, voxels + voxel_count_, [&codec](const auto& v) { return codec.decode(v).weight > 0.0f; });
+  });
+}
+
 void TsdfVolume::clear() {
   const Voxel unseen{positive_truncation_, 0.0f};
   if (compact()) {

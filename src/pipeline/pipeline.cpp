@@ -19,6 +19,9 @@ namespace {
 
 /// Failed frames after which a fit from the held pose is no longer taken without confirmation.
 constexpr int kBriefLossFrames = 2;
+/// No frame for this many of the camera's intervals between tracked frames (and longer than the
+/// prediction bridges): frames went missing, and the camera may have been carried anywhere.
+constexpr double kMissingFrameIntervals = 10.0;
 /// Along directions a degenerate view does not constrain, each such frame keeps this part of the
 /// predicted motion: the motion decays (to half in 7 frames) instead of persisting, and all of
 /// it adds up to no more than nine frames' worth.
@@ -48,6 +51,14 @@ std::unique_ptr<MapMemoryBudget> makeBudget(const PipelineConfig& config, MapTyp
   } catch (const std::runtime_error& e) {
     throw std::invalid_argument(std::string("MaxMemoryMB needs a swap file (SwapDirectory): ") + e.what());
   }
+}
+
+/// The box that holds every voxel the map may have observed: a sparse map's blocks, a dense grid.
+Eigen::AlignedBox3f mappedBox(const TsdfMap& map) {
+  if (map.type() != MapType::kSparse) return map.holdableRegion();
+  Eigen::Vector3i first, dims;
+  static_cast<const SparseTsdfMap&>(map).bounds(&first, &dims);
+  return Eigen::AlignedBox3f(map.position(first), map.position(first + dims - Eigen::Vector3i::Ones()));
 }
 
 /// The grid's geometry with its origin placed for the start pose.
@@ -124,11 +135,12 @@ void SdfPipeline::reset() {
   T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   motion_.clear();
   T_odom_C_held_.reset();
-  held_pose_timestamp_s_ = std::numeric_limits<double>::quiet_NaN();
+  held_pose_timestamp_s_ = tracked_interval_s_ = std::numeric_limits<double>::quiet_NaN();
 }
 
 void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemory> places) {
   if (!map) throw std::invalid_argument("setMap: no map");
+  if (map->observesNothing()) throw std::invalid_argument("the map holds no observed voxel: nothing to track against");
   map_ = std::move(map);
   config_.volume = map_->config();
   budget_ = makeBudget(config_, map_->type());
@@ -138,7 +150,7 @@ void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemo
   consecutive_failures_ = 0;
   motion_.clear();
   T_odom_C_held_.reset();
-  held_pose_timestamp_s_ = std::numeric_limits<double>::quiet_NaN();
+  held_pose_timestamp_s_ = tracked_interval_s_ = std::numeric_limits<double>::quiet_NaN();
   relocaliser_->cancel();
   pose_unknown_ = config_.relocalise;
   search_guess_.reset();  // the start pose is tried anyway, as the held pose
@@ -147,6 +159,20 @@ void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemo
 void SdfPipeline::relocalise(const std::optional<Eigen::Isometry3d>& guess) {
   if (!config_.relocalise) throw std::logic_error("relocalisation is off (Relocalise)");
   if (!map_initialised_) throw std::logic_error("nothing is mapped yet: there is nowhere to relocalise in");
+  if (guess) {
+    // A camera further from every mapped voxel than it sees cannot be in the map.
+    const Eigen::AlignedBox3d box = mappedBox(*map_).cast<double>();
+    const Eigen::Vector3d position = guess->translation();
+    const Eigen::Vector3d outside = (box.min() - position).cwiseMax(position - box.max()).cwiseMax(0.0);
+    const double distance_m = position.allFinite() ? outside.stableNorm() : HUGE_VAL;  // no overflow at 1e300
+    if (!(distance_m <= config_.max_depth_m)) {
+      std::ostringstream s;
+      s << std::setprecision(4) << "the camera at (" << position.transpose() << ") m would be " << distance_m
+        << " m from the map (its voxels lie within (" << box.min().transpose() << ") .. (" << box.max().transpose()
+        << ") m), beyond MaxDepth " << config_.max_depth_m << " m: it could see nothing of it";
+      throw std::invalid_argument(s.str());
+    }
+  }
   relocaliser_->cancel();
   pose_unknown_ = true;
   search_guess_ = guess;
@@ -248,8 +274,12 @@ bool SdfPipeline::search(const DepthImage& filtered, const PinholeCamera& camera
     try {
       relocaliser_->begin(*map_);
     } catch (const std::invalid_argument& e) {
-      pose_unknown_ = false;  // an empty map: the next frame is tracked from the held pose
+      pose_unknown_ = false;  // a map without a surface: the next frame is tracked from the held pose
       r.message = std::string("no search: ") + e.what();
+      report->track.status = TrackStatus::kRelocalising;
+      report->track.T_W_C = T_W_C_;
+      report->track.pose_estimated = false;
+      report->track.message = r.message + (tracking_failure.empty() ? "" : " (from the held pose: " + tracking_failure + ")");
       return false;
     }
     // A pose the user gave first, then the one held (the last known, or the map's start pose).
@@ -375,10 +405,12 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     // In a brief loss the camera cannot have gone far: a fit from the held pose is taken at once.
     // After a longer one the camera may be anywhere (carried with its view blocked), and a fit
     // there must be confirmed like any candidate: the held pose stays until then.
-    // Frames missing for longer than the prediction bridges count as such a loss too (NaN times:
-    // no gap), unless the other odometry measured the motion across them.
+    // Frames missing for longer than the prediction bridges, and for many of the camera's frame
+    // intervals (a camera at 1 Hz misses none), count as such a loss too (NaN times, or no
+    // interval known yet: no gap), unless the other odometry measured the motion across them.
     const double unseen_s = timestamp_s - held_pose_timestamp_s_;
-    const bool unseen_gap = !report.predicted_by_odometry && unseen_s > config_.max_prediction_gap_s;
+    const bool unseen_gap = !report.predicted_by_odometry && unseen_s > config_.max_prediction_gap_s &&
+                            unseen_s > kMissingFrameIntervals * tracked_interval_s_;
     const bool brief_loss = (consecutive_failures_ <= kBriefLossFrames && !unseen_gap) || !config_.relocalise;
     if (unseen_gap && report.track.tracked() && config_.relocalise) {
       std::ostringstream s;
@@ -413,6 +445,7 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     consecutive_failures_ = 0;
   }
   motion_.addTracked(timestamp_s, T_W_C_);
+  tracked_interval_s_ = timestamp_s - held_pose_timestamp_s_;
   held_pose_timestamp_s_ = timestamp_s;
   T_odom_C_held_ = T_odom_C;
   if (config_.relocalise) places_->offer(filtered, T_W_C_);

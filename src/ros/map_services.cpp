@@ -70,16 +70,6 @@ std::string MapServices::outputPath(const std::string& requested, const std::str
   return requested.empty() ? options_.output_directory + "/" + default_name : requested;
 }
 
-std::string describePlaces(size_t keyframes, bool relocalise) {
-  if (!relocalise) return "; Relocalise is off: tracking starts at the map's start pose";
-  if (keyframes == 0) {
-    return "; it holds no place memory (a .vti, or a .sdfmap of format version 1): the camera is searched for "
-           "from the map's start pose only";
-  }
-  return "; its place memory holds " + std::to_string(keyframes) +
-         " keyframes: the camera is searched for in it, and nothing is fused until it is found";
-}
-
 std::unique_ptr<st::TsdfMap> MapServices::copyMap(std::vector<st::io::StampedPose>* trajectory,
                                                   st::PlaceMemory* places) {
   std::lock_guard<std::mutex> lock(state_.mutex);
@@ -226,12 +216,12 @@ bool MapServices::loadVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
     // Read before taking the lock.
     std::unique_ptr<st::PlaceMemory> places;
     std::unique_ptr<st::TsdfMap> loaded = st::io::readMap(path, compact, &places, places_config);
-    const size_t keyframes = places ? places->keyframes().size() : 0;
     std::lock_guard<std::mutex> lock(state_.mutex);
+    const std::string held = st::io::describeLoadedPlaces(places.get(), state_.pipeline->config().relocalise);
     state_.pipeline->setMap(std::move(loaded), std::move(places));
     state_.trajectory.clear();
     state_.restarted = true;
-    return "tracking against " + path + describePlaces(keyframes, state_.pipeline->config().relocalise);
+    return "tracking against " + path + ", which " + held;
   });
 }
 

@@ -6,11 +6,14 @@ namespace sdf_tracker_ros {
 
 using diagnostic_msgs::DiagnosticStatus;
 
-NodeDiagnostics::NodeDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& hardware_id)
-    : updater_(nh, pnh, pnh.getNamespace()) {  // the nodelet's own name, not its manager's
+NodeDiagnostics::NodeDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& hardware_id,
+                                 const std::string& odometry_transform)
+    : updater_(nh, pnh, pnh.getNamespace()),  // the nodelet's own name, not its manager's
+      odometry_transform_(odometry_transform) {
   updater_.setHardwareID(hardware_id);
   updater_.add("frames", this, &NodeDiagnostics::frames);
   updater_.add("tracking", this, &NodeDiagnostics::tracking);
+  if (!odometry_transform_.empty()) updater_.add("odometry", this, &NodeDiagnostics::odometry);
   // The updater publishes at its own period (~diagnostic_period, 1 s); it has to be asked often.
   timer_ = nh.createTimer(ros::Duration(0.25), [this](const ros::TimerEvent&) { updater_.update(); });
 }
@@ -22,6 +25,36 @@ void NodeDiagnostics::frameProcessed(const sdf_tracker::TrackingStatus& status, 
   trim(now);
   last_ = status;
   any_ = true;
+}
+
+void NodeDiagnostics::odometryLookedUp(const std::string& problem) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  odometry_looked_up_ = true;
+  odometry_problem_ = problem;
+  if (problem.empty()) {
+    ++frames_with_odometry_;
+    without_odometry_in_a_row_ = 0;
+  } else {
+    ++frames_without_odometry_;
+    ++without_odometry_in_a_row_;
+  }
+}
+
+void NodeDiagnostics::odometry(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  stat.add("transform", odometry_transform_);
+  stat.add("frames with odometry", frames_with_odometry_);
+  stat.add("frames without odometry", frames_without_odometry_);
+  if (!odometry_looked_up_) {
+    stat.summary(DiagnosticStatus::WARN, "no frame yet");
+  } else if (!odometry_problem_.empty()) {
+    stat.add("last problem", odometry_problem_);
+    stat.summaryf(DiagnosticStatus::WARN, "%u frames in a row without odometry (predicted at constant velocity): %s",
+                  without_odometry_in_a_row_, odometry_problem_.c_str());
+  } else {
+    stat.summaryf(DiagnosticStatus::OK, "%s in tf at the last frame (%u of %u frames)", odometry_transform_.c_str(),
+                  frames_with_odometry_, frames_with_odometry_ + frames_without_odometry_);
+  }
 }
 
 void NodeDiagnostics::trim(const ros::WallTime& now) {

@@ -72,7 +72,7 @@ nav_msgs::Odometry OdometryBuilder::build(double stamp_s, const std::string& chi
 
   Covariance6d twist_covariance = sdf_tracker::kUnconstrainedVariance * Covariance6d::Identity();
   const double dt = previous_ ? stamp_s - previous_->stamp_s : 0.0;
-  if (covariance && previous_ && dt > 0.0) {
+  if (covariance && previous_ && dt > 0.0 && dt <= kMaxTwistInterval_s) {
     // The motion since the previous message, in the body's frame now (REP 105: twist in child_frame_id).
     const Eigen::Matrix3d R_body_map = T_map_body.linear().transpose();
     const Eigen::Vector3d velocity = R_body_map * (T_map_body.translation() - previous_->T_map_body.translation()) / dt;

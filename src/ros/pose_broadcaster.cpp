@@ -139,20 +139,40 @@ std::optional<Eigen::Isometry3d> PoseBroadcaster::odometryCameraPose(const ros::
   if (frames_.odom_frame.empty()) return std::nullopt;
   const std::string camera_frame = cameraFrameOf(image_frame);
   const std::string base = frames_.base_frame.empty() ? camera_frame : frames_.base_frame;
+  const std::string missing = frames_.odom_frame + " -> " + base + " -> " + camera_frame;
   try {
+    // An odometry that flows may lag the image by a little: wait for it. One that stopped, or never
+    // came, is not waited for.
+    ros::Duration wait(0.0);
+    try {
+      const ros::Time latest = tf_buffer_.lookupTransform(frames_.odom_frame, base, ros::Time(0)).header.stamp;
+      if ((stamp - latest).toSec() < kOdometryStale_s) wait = ros::Duration(kOdometryWait_s);
+    } catch (const tf2::TransformException&) {
+      // Never had it: the lookup below says why.
+    }
     // The odometry at the image's stamp; the camera's mounting as tf has it last (it is rigid,
     // and chains re-published at the camera's rate would make every frame wait for the next).
-    return tf2::transformToEigen(
-               tf_buffer_.lookupTransform(frames_.odom_frame, base, stamp, ros::Duration(kOdometryWait_s))) *
-           T_base_C(camera_frame);
+    const Eigen::Isometry3d T_odom_C =
+        tf2::transformToEigen(tf_buffer_.lookupTransform(frames_.odom_frame, base, stamp, wait)) *
+        T_base_C(camera_frame);
+    if (frames_without_odometry_ > 0) {
+      ROS_INFO("sdf_tracker: odometry back (%s) after %zu frames without it", missing.c_str(), frames_without_odometry_);
+    }
+    frames_without_odometry_ = 0;
+    odometry_problem_.clear();
+    return T_odom_C;
   } catch (const tf2::TransformException& e) {
-    ROS_WARN_THROTTLE(kTfWaitThrottle_s,
-                      "sdf_tracker: no odometry for the frame stamped %.3f: tf has no %s -> %s -> %s then (~odom_frame "
-                      "names the robot's odometry, which must publish %s -> %s; without one leave ~odom_frame "
-                      "empty): %s. Such frames are predicted at constant velocity and %s -> %s is not published.",
-                      stamp.toSec(), frames_.odom_frame.c_str(), base.c_str(), camera_frame.c_str(),
-                      frames_.odom_frame.c_str(), base.c_str(), e.what(), frames_.map_frame.c_str(),
-                      frames_.odom_frame.c_str());
+    odometry_problem_ = "no " + missing + " in tf at the image's stamp: " + e.what();
+    if (frames_without_odometry_++ == 0) {
+      ROS_WARN("sdf_tracker: no odometry for the frame stamped %.3f: tf has no %s then (~odom_frame names the "
+               "robot's odometry, which must publish %s -> %s; without one leave ~odom_frame empty): %s. Until it "
+               "comes, frames are predicted at constant velocity, not waited for, and %s -> %s is not published.",
+               stamp.toSec(), missing.c_str(), frames_.odom_frame.c_str(), base.c_str(), e.what(),
+               frames_.map_frame.c_str(), frames_.odom_frame.c_str());
+    } else {
+      ROS_WARN_THROTTLE(30.0, "sdf_tracker: still no odometry (%s): %zu frames in a row without it",
+                        missing.c_str(), frames_without_odometry_);
+    }
     return std::nullopt;
   }
 }
@@ -250,17 +270,19 @@ Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::st
   const Eigen::Matrix3d R_map_W = T_map_W_.linear();
   lock.unlock();
 
-  geometry_msgs::PoseStamped pose;
-  pose.header.stamp = stamp;
-  pose.header.frame_id = frames_.map_frame;
-  pose.pose = toPoseMsg(T_map_C);
-  pose_pub_.publish(pose);
-  path_poses_.push_back(pose);
-  while (static_cast<int>(path_poses_.size()) > path_length_) path_poses_.pop_front();
-  if (path_pub_.getNumSubscribers() > 0) {
-    path_.header.stamp = stamp;
-    path_.poses.assign(path_poses_.begin(), path_poses_.end());
-    path_pub_.publish(path_);
+  if (covariance_W) {  // an estimate: a held pose has no place on ~pose or ~path
+    geometry_msgs::PoseStamped pose;
+    pose.header.stamp = stamp;
+    pose.header.frame_id = frames_.map_frame;
+    pose.pose = toPoseMsg(T_map_C);
+    pose_pub_.publish(pose);
+    path_poses_.push_back(pose);
+    while (static_cast<int>(path_poses_.size()) > path_length_) path_poses_.pop_front();
+    if (path_pub_.getNumSubscribers() > 0) {
+      path_.header.stamp = stamp;
+      path_.poses.assign(path_poses_.begin(), path_poses_.end());
+      path_pub_.publish(path_);
+    }
   }
 
   // map -> [odom ->] base, such that map -> camera is the estimate.

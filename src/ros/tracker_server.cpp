@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <iomanip>
 #include <numeric>
+#include <sstream>
 
 #include <image_transport/camera_common.h>
 #include <topic_tools/shape_shifter.h>
@@ -26,6 +28,19 @@ constexpr double kThrottle_s = 2.0;
 constexpr int kLostAfterFailedFrames = 10;
 /// Frames wait in ROS's queue only as long as it takes to move them into the mailbox.
 constexpr uint32_t kSubscriberQueue = 5;
+/// The same pose on ~initialpose again within this many seconds is a repeat, not a new request.
+constexpr double kRepeatedRequest_s = 1.0;
+/// A pose request stamped further ahead of the node's clock than this is refused: its clock is
+/// not the node's.
+constexpr double kMaxRequestAhead_s = 1.0;
+
+bool samePoseRequest(const geometry_msgs::PoseWithCovarianceStamped& a, const geometry_msgs::PoseWithCovarianceStamped& b) {
+  const auto& p = a.pose.pose;
+  const auto& q = b.pose.pose;
+  return a.header.frame_id == b.header.frame_id && p.position.x == q.position.x && p.position.y == q.position.y &&
+         p.position.z == q.position.z && p.orientation.x == q.orientation.x && p.orientation.y == q.orientation.y &&
+         p.orientation.z == q.orientation.z && p.orientation.w == q.orientation.w;
+}
 
 std::string statusText(const st::TrackResult& result) {
   std::string text = st::toString(result.status);
@@ -46,10 +61,10 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
     std::unique_ptr<st::PlaceMemory> places;
     std::unique_ptr<st::TsdfMap> map = st::io::readMap(options_.load_volume, settings.pipeline.volume.compact_voxels,
                                                        &places, settings.pipeline.places);
+    const std::string held = st::io::describeLoadedPlaces(places.get(), settings.pipeline.relocalise);
     state_.pipeline->setMap(std::move(map), std::move(places));
-    ROS_INFO("sdf_tracker: tracking against the map in %s (%s)%s", options_.load_volume.c_str(),
-             state_.pipeline->config().volume.describe().c_str(),
-             describePlaces(state_.pipeline->places().keyframes().size(), settings.pipeline.relocalise).c_str());
+    ROS_INFO("sdf_tracker: tracking against the map in %s (%s), which %s", options_.load_volume.c_str(),
+             state_.pipeline->config().volume.describe().c_str(), held.c_str());
   }
 
   poses_ = std::make_unique<PoseBroadcaster>(nh_, pnh_, options_);
@@ -74,7 +89,11 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
 
   const std::string depth_topic =
       options_.camera_name + (options_.depth_registered ? "/depth_registered/image" : "/depth/image");
-  diagnostics_ = std::make_unique<NodeDiagnostics>(nh_, pnh_, nh_.resolveName(depth_topic));
+  const auto& f = options_.frames;
+  const std::string base =
+      !f.base_frame.empty() ? f.base_frame : f.camera_frame.empty() ? "<image frame>" : f.camera_frame;
+  diagnostics_ = std::make_unique<NodeDiagnostics>(nh_, pnh_, nh_.resolveName(depth_topic),
+                                                   f.odom_frame.empty() ? "" : f.odom_frame + " -> " + base);
   frame_thread_ = std::thread(&TrackerServer::frameLoop, this);
   if (options_.intrinsics_from_parameters) {
     depth_only_sub_ = it_.subscribe(depth_topic, kSubscriberQueue,
@@ -101,14 +120,20 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
   initial_pose_sub_ = pnh_.subscribe<geometry_msgs::PoseWithCovarianceStamped>(
       "initialpose", 1, [this](const geometry_msgs::PoseWithCovarianceStampedConstPtr& request) {
         std::lock_guard<std::mutex> lock(mailbox_mutex_);
+        const ros::WallTime now = ros::WallTime::now();
+        const bool repeat = last_pose_request_ && samePoseRequest(*last_pose_request_, *request) &&
+                            (now - last_pose_request_wall_).toSec() < kRepeatedRequest_s;
+        last_pose_request_ = *request;
+        last_pose_request_wall_ = now;
+        if (repeat) {
+          ROS_DEBUG("sdf_tracker: the same pose again on %s: already taken", initial_pose_sub_.getTopic().c_str());
+          return;
+        }
         pending_pose_request_ = *request;
       });
   watchdog_timer_ = nh_.createTimer(ros::Duration(2.0), &TrackerServer::checkInputs, this);
 
   const auto& v = settings.pipeline.volume;
-  const auto& f = options_.frames;
-  const std::string base =
-      !f.base_frame.empty() ? f.base_frame : f.camera_frame.empty() ? "<image frame>" : f.camera_frame;
   const std::string tree = f.odom_frame.empty()
                                ? f.map_frame + " -> " + base
                                : f.map_frame + " -> " + f.odom_frame + " (" + f.odom_frame + " -> " + base +
@@ -245,6 +270,7 @@ void TrackerServer::process(const Frame& frame) {
   // The robot's odometry at this image (~odom_frame), looked up before the state is locked: it may
   // wait for tf.
   const std::optional<Eigen::Isometry3d> T_odom_C = poses_->odometryCameraPose(image.header.stamp, image.header.frame_id);
+  if (!options_.frames.odom_frame.empty()) diagnostics_->odometryLookedUp(poses_->odometryProblem());
   st::FrameReport report;
   Eigen::Isometry3d T_W_C;
   bool pose_known = true;
@@ -335,14 +361,18 @@ void TrackerServer::process(const Frame& frame) {
   status.predicted_by_odometry = report.predicted_by_odometry;
   status.lost = lost_;
 
-  // While the camera is searched for in the map, its pose is not known: nothing goes on tf, ~pose,
-  // ~path or the trajectory until a place is confirmed (the status says how the search goes).
+  // While the camera is searched for in the map, its pose is not known: nothing goes out until a
+  // place is confirmed (the status says how the search goes). A held pose (the frame failed) goes
+  // on tf and ~odom, whose covariance says how little it is worth; ~pose, ~path and the
+  // trajectory carry estimates only.
   if (pose_known) {
     const Eigen::Isometry3d T_map_C = poses_->publish(
         image.header.stamp, image.header.frame_id, T_W_C,
         t.tracked() ? std::optional<Covariance6d>(t.covariance) : std::nullopt, T_odom_C);
-    std::lock_guard<std::mutex> lock(state_.mutex);
-    state_.trajectory.push_back({image.header.stamp.toSec(), T_map_C});
+    if (t.tracked()) {
+      std::lock_guard<std::mutex> lock(state_.mutex);
+      state_.trajectory.push_back({image.header.stamp.toSec(), T_map_C});
+    }
   }
   publishStatus(status);
 
@@ -368,6 +398,14 @@ void TrackerServer::applyPoseRequest(const geometry_msgs::PoseWithCovarianceStam
                                      const std::string& image_frame) {
   const std::string topic = initial_pose_sub_.getTopic();
   try {
+    const double ahead_s = (request.header.stamp - ros::Time::now()).toSec();
+    if (ahead_s > kMaxRequestAhead_s) {
+      std::ostringstream msg;
+      msg << std::fixed << std::setprecision(3) << "it is stamped " << request.header.stamp.toSec() << ", " << ahead_s
+          << " s ahead of this node's clock (" << ros::Time::now().toSec()
+          << "): its sender's clock is not this one (use_sim_time?)";
+      throw std::runtime_error(msg.str());
+    }
     if (request.header.frame_id.empty()) {
       ROS_WARN("sdf_tracker: the pose on %s has no frame_id: taken in ~map_frame '%s'", topic.c_str(),
                poses_->mapFrame().c_str());
@@ -375,9 +413,10 @@ void TrackerServer::applyPoseRequest(const geometry_msgs::PoseWithCovarianceStam
     const Eigen::Isometry3d T_W_C = poses_->requestedCameraPose(request, image_frame, state_.pipeline->pose());
     state_.pipeline->relocalise(T_W_C);  // throws, naming Relocalise, when it is off
     const Eigen::Vector3d t_map = poses_->T_map_W() * T_W_C.translation();
-    ROS_INFO("sdf_tracker: pose from %s: the camera at (%.3f, %.3f, %.3f) m in %s (x, y and yaw given, height and "
-             "tilt kept); verifying it before anything is fused",
-             topic.c_str(), t_map.x(), t_map.y(), t_map.z(), poses_->mapFrame().c_str());
+    ROS_INFO_THROTTLE(1.0,
+                      "sdf_tracker: pose from %s: the camera at (%.3f, %.3f, %.3f) m in %s (x, y and yaw given, "
+                      "height and tilt kept); verifying it before anything is fused",
+                      topic.c_str(), t_map.x(), t_map.y(), t_map.z(), poses_->mapFrame().c_str());
   } catch (const std::exception& e) {
     ROS_ERROR("sdf_tracker: ignoring the pose on %s: %s", topic.c_str(), e.what());
   }

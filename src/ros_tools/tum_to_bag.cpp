@@ -1,6 +1,7 @@
 // tum_to_bag: converts a TUM-layout folder into a rosbag shaped like the TUM RGB-D benchmark's own
 // bags of 2011, so the ROS workflow can be tried and tested exactly as with a downloaded bag.
 //   rosrun sdf_tracker tum_to_bag SEQUENCE_DIR OUT.bag [--frames N] [--openni-default-intrinsics]
+//                                 [--without-odometry]
 // As in the benchmark's bags:
 //   /camera/depth/image (32FC1 metres, NaN = no data) + /camera/depth/camera_info,
 //   frame "/openni_depth_optical_frame" (with its leading slash);
@@ -13,7 +14,8 @@
 //   and, beyond the benchmark, a robot's wheel odometry when it has odometry.txt (the camera's poses
 //   in the odometry's frame, as sdf_tracker_synth --odometry writes them): /odom -> /base_link on
 //   /tf at each of its poses, the base being the camera's mount (/base_link -> /kinect, identity,
-//   with the chain), as a robot's odometry publishes it.
+//   with the chain), as a robot's odometry publishes it. With --without-odometry the mount is
+//   there but /odom -> /base_link is not: a robot whose odometry is down.
 // camera_info holds the sequence's intrinsics; with --openni-default-intrinsics it holds what the
 // benchmark's own bags are expected to hold instead (inferred from the driver, not checked on one):
 // the OpenNI driver's default (fx = fy = 525, the image centre, D all zero), which is not the
@@ -49,7 +51,8 @@ namespace {
 
 namespace st = sdf_tracker;
 
-constexpr const char* kUsage = "usage: tum_to_bag SEQUENCE_DIR OUT.bag [--frames N] [--openni-default-intrinsics]";
+constexpr const char* kUsage =
+    "usage: tum_to_bag SEQUENCE_DIR OUT.bag [--frames N] [--openni-default-intrinsics] [--without-odometry]";
 constexpr double kChainRate_hz = 30.0;  ///< as the openni driver re-published its static frames
 
 /// A link of the openni chain: parent, child, transform parent <- child.
@@ -149,7 +152,7 @@ uint64_t estimatedBagBytes(const st::TumSequence& sequence, size_t colour_images
 }
 
 int run(int argc, char** argv) {
-  const st::tools::CommandLine args(argc, argv, {"frames"}, {"help", "openni-default-intrinsics"},
+  const st::tools::CommandLine args(argc, argv, {"frames"}, {"help", "openni-default-intrinsics", "without-odometry"},
                                     {"SEQUENCE_DIR", "OUT.bag"});
   if (args.has("help")) {
     std::cout << kUsage << "\n";
@@ -164,9 +167,13 @@ int run(int argc, char** argv) {
   std::vector<Link> chain = openniChain();
   const Eigen::Isometry3d T_depth_kinect = kinectFromDepthOptical(chain).inverse();
   const std::string odometry_path = args.positional(0) + "/odometry.txt";
-  const std::vector<st::io::StampedPose> odometry =
+  std::vector<st::io::StampedPose> odometry =
       std::ifstream(odometry_path) ? st::io::readTrajectory(odometry_path) : std::vector<st::io::StampedPose>{};
   if (!odometry.empty()) chain.push_back(robotMount());
+  if (args.has("without-odometry")) {
+    if (odometry.empty()) throw std::invalid_argument("--without-odometry: " + odometry_path + " holds no odometry to leave out");
+    odometry.clear();
+  }
   const auto& gt = sequence.groundTruth();
   const auto colour = readTimedLines(args.positional(0) + "/rgb.txt");
   const auto accelerometer = readTimedLines(args.positional(0) + "/accelerometer.txt");

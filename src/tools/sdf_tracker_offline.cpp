@@ -183,7 +183,17 @@ int run(int argc, char** argv) {
   std::vector<std::optional<Eigen::Isometry3d>> true_T_W_C;
   if (args.has("fuse-ground-truth")) true_T_W_C = st::tools::truePosesInFirstFrame(sequence);
   std::optional<st::tools::OdometryTrack> odometry;
-  if (args.has("odometry")) odometry = st::tools::OdometryTrack::read(args.get("odometry"));
+  if (args.has("odometry")) {
+    odometry = st::tools::OdometryTrack::read(args.get("odometry"));
+    std::vector<double> stamps(sequence.size());
+    for (size_t i = 0; i < sequence.size(); ++i) stamps[i] = sequence.timestamp(i);
+    const size_t covered = odometry->requireCoverage(stamps);
+    if (covered < stamps.size()) {
+      std::cerr << "warning: --odometry " << args.get("odometry") << " gives a pose for " << covered << " of "
+                << stamps.size() << " frames; the others are predicted at constant velocity\n";
+    }
+    if (!odometry->jumps().empty()) std::cerr << "warning: " << odometry->jumps() << "\n";
+  }
   const std::vector<std::string> summaries = {"summary.txt", "summary.json"};
   st::tools::OutputFolder output(output_dir, {"trajectory.txt", "frames.csv", "mesh.ply", "cloud.ply", "sdf_volume.vti",
                                               "map.sdfmap", "triangles.obj", "trajectory.png", "summary.txt", "summary.json"});
@@ -208,18 +218,18 @@ int run(int argc, char** argv) {
     std::unique_ptr<st::PlaceMemory> places;
     std::unique_ptr<st::TsdfMap> map =
         st::io::readMap(path, settings.pipeline.volume.compact_voxels, &places, settings.pipeline.places);
+    std::cout << (places && !places->empty() ? "" : "note: ") << path << " "
+              << st::io::describeLoadedPlaces(places.get(), settings.pipeline.relocalise) << "\n";
     pipeline.setMap(std::move(map), std::move(places));
-    if (pipeline.places().empty()) {
-      std::cout << "note: " << path << " holds no place memory (a .vti, or a .sdfmap of format version 1)"
-                << (settings.pipeline.relocalise ? ": the camera is searched for from the map's start pose only"
-                                                 : "")
-                << "\n";
-    } else {
-      std::cout << "place memory: " << pipeline.places().keyframes().size() << " keyframes from " << path << "\n";
-    }
     // The file's grid replaces the configured one: the rules between parameters must hold for it.
     st::throwIfInvalid("parameters with the grid of " + path, st::Settings{pipeline.config(), settings.camera}.validate());
-    if (args.has("initial-pose")) pipeline.relocalise(st::tools::parsePose("--initial-pose", args.get("initial-pose")));
+    if (args.has("initial-pose")) {
+      try {
+        pipeline.relocalise(st::tools::parsePose("--initial-pose", args.get("initial-pose")));
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument("--initial-pose " + args.get("initial-pose") + ": " + e.what());
+      }
+    }
   }
   if (volume_region) requireExportable(pipeline.map(), *volume_region, args.get("volume-region"));
   const auto& v = pipeline.config().volume;
@@ -259,7 +269,6 @@ int run(int argc, char** argv) {
       std::cerr << "\nframe " << i << ": " << message << ": skipped\n";
       if (unreadable++ == 0) first_unreadable = message;
       ++failed;
-      trajectory.push_back({sequence.timestamp(i), pipeline.pose()});
       std::replace(message.begin(), message.end(), ',', ';');
       frames_csv << std::fixed << std::setprecision(6) << sequence.timestamp(i) << ','
                  << st::toString(st::TrackStatus::kBadInput) << ",,0,0,0,0,0,0,0,0," << std::setprecision(3)
@@ -287,8 +296,9 @@ int run(int argc, char** argv) {
     if (!t.tracked()) ++failed;
     if (t.tracked() && t.status == st::TrackStatus::kDegenerate) ++degenerate;
     if (t.tracked() && !report.initialised_map) ++tracked_in_map;
-    // The estimate: with --fuse-ground-truth, where the tracker took the frame, not the fused pose.
-    trajectory.push_back({sequence.timestamp(i), true_T_W_C.empty() ? pipeline.pose() : t.T_W_C});
+    // Estimates only (a held pose is none; frames.csv lists every frame): with --fuse-ground-truth,
+    // where the tracker took the frame, not the fused pose.
+    if (t.tracked()) trajectory.push_back({sequence.timestamp(i), true_T_W_C.empty() ? pipeline.pose() : t.T_W_C});
     if (!true_T_W_C.empty() && !report.initialised_map && t.tracked()) {
       const Eigen::Vector3d error_m = t.T_W_C.translation() - true_T_W_C[i]->translation();
       single_frame_errors_m.push_back(error_m.norm());

@@ -99,6 +99,35 @@ TEST_F(NodeTest, AFrameFromThePastIsDroppedWithoutWipingTheMap) {
   EXPECT_EQ(path_length_, 4u) << "the path holds the four tracked frames since the reset";
 }
 
+TEST_F(NodeTest, AHeldPoseGoesOutOnNeitherPoseNorPath) {
+  // Issue 44: after a loss ~pose and the trajectory carried frozen copies of the held pose, which an
+  // evaluator or a planner cannot tell from estimates (README: "Estimates and held poses").
+  ASSERT_TRUE(callService("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
+  for (int i = 0; i < 3; ++i) publishDeskFrame(800.0 + i / 30.0, i / 30.0);
+  ros::Duration(0.3).sleep();
+  size_t poses_before;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    poses_before = poses_.size();
+  }
+  // A wall 7.5 m away, far beyond the mapped room: tracking fails and the pose is held (two frames:
+  // a brief loss, after which a fit from the held pose is taken at once).
+  std_msgs::Header header;
+  header.frame_id = "camera_depth_optical_frame";
+  for (int i = 0; i < 2; ++i) {
+    header.stamp = ros::Time(800.0 + (3 + i) / 30.0);
+    const auto held = publishAndWait(sdf_tracker_ros::toImageMsg(st::DepthImage(kQvga.width, kQvga.height, 7.5f), header), kQvga);
+    EXPECT_NE(held.status, sdf_tracker::TrackingStatus::OK) << held.status_text;
+    EXPECT_FALSE(held.fused) << held.status_text;
+  }
+  const auto back = publishDeskFrame(800.0 + 5 / 30.0, 3 / 30.0);
+  EXPECT_EQ(back.status, sdf_tracker::TrackingStatus::OK) << back.status_text;
+  ros::Duration(0.3).sleep();
+  std::lock_guard<std::mutex> lock(mutex_);
+  EXPECT_EQ(poses_.size(), poses_before + 1) << "only the frame tracked again goes out on ~pose";
+  EXPECT_EQ(path_length_, 4u) << "the path holds the four estimates since the reset";
+}
+
 TEST_F(NodeTest, NeverGivesAFrameThatHasAParentASecondOne) {
   // Another publisher already gives the image's frame a parent (as a camera driver's chain does).
   const std::string frame = "mounted_optical_frame";

@@ -140,6 +140,31 @@ TEST_F(NodeRelocalisationTest, APoseOnInitialposeIsVerifiedAndTheCameraTrackedFr
   EXPECT_GE(searchUntilTracked(901.0, kMaxSearchFrames, &last), 2) << "the given pose is confirmed first";
   expectTrackedAtTheTruth(last);
   expectNoPoseBetween(900.0, 900.0 + 3 / 30.0);
+
+  // Issue 44: a request stamped 1e6 s ahead of the node's clock was taken without a word; it is
+  // refused, and the camera stays tracked.
+  geometry_msgs::PoseWithCovarianceStamped ahead = request;
+  ahead.header.stamp = ros::Time::now() + ros::Duration(1e6);
+  ahead.pose.pose.position.x += 0.01;  // not a repeat of the request before
+  initial_pose.publish(ahead);
+  ros::Duration(0.5).sleep();
+  const auto after_ahead = publishDeskFrame(902.0, kSearchTime_s);
+  EXPECT_EQ(after_ahead.status, sdf_tracker::TrackingStatus::OK) << "a refused request starts no search: "
+                                                                  << after_ahead.status_text;
+
+  // Issue 44: the same pose in a burst restarted the verification at every frame, so that it
+  // never ended; repeats are taken once.
+  ASSERT_TRUE(callService("sdf_tracker/relocalise", *std::make_unique<std_srvs::Trigger>()));
+  int searching = 0;
+  for (int i = 0; i < kMaxSearchFrames; ++i) {
+    initial_pose.publish(request);
+    ros::Duration(0.05).sleep();
+    last = publishDeskFrame(903.0 + i / 30.0, kSearchTime_s);
+    if (last.status != sdf_tracker::TrackingStatus::RELOCALISING) break;
+    ++searching;
+  }
+  std::cout << "[ figures  ] with the same pose sent before every frame: " << searching << " frames searched\n";
+  expectTrackedAtTheTruth(last);
 }
 
 }  // namespace

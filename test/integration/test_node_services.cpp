@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <fstream>
+
 #include "node_test.h"
 
 namespace node_test {
@@ -54,6 +57,33 @@ TEST_F(NodeTest, AMapSavedBySaveVolumeIsTrackedInAfterLoadVolume) {
   ASSERT_TRUE(callService("sdf_tracker/load_volume", load));
   EXPECT_FALSE(load.response.success);
   EXPECT_NE(load.response.message.find(load.request.path), std::string::npos) << load.response.message;
+}
+
+TEST_F(NodeTest, AnEmptyMapIsNeitherSavedNorLoaded) {
+  // Issue 44: save_volume on a node that had mapped nothing answered success with a map of 0
+  // blocks, and load_volume of such a file replaced the live map with one the node never tracked in.
+  ASSERT_TRUE(callService("sdf_tracker/reset", *std::make_unique<std_srvs::Empty>()));
+  sdf_tracker::SavePath save;
+  save.request.path = "/tmp/sdf_tracker_node_test_empty.sdfmap";
+  std::remove(save.request.path.c_str());
+  ASSERT_TRUE(callService("sdf_tracker/save_volume", save));
+  EXPECT_FALSE(save.response.success);
+  EXPECT_NE(save.response.message.find("nothing is mapped yet"), std::string::npos) << save.response.message;
+  EXPECT_FALSE(std::ifstream(save.request.path).good()) << "no file written";
+
+  for (int i = 0; i < 3; ++i) publishDeskFrame(700.0 + i / 30.0, i / 30.0);
+  st::VolumeConfig empty;
+  empty.type = st::MapType::kSparse;
+  st::io::writeSparseMap(save.request.path, st::SparseTsdfMap(empty));
+  sdf_tracker::SavePath load;
+  load.request.path = save.request.path;
+  ASSERT_TRUE(callService("sdf_tracker/load_volume", load));
+  EXPECT_FALSE(load.response.success);
+  EXPECT_NE(load.response.message.find("an empty map"), std::string::npos) << load.response.message;
+  // The live map stays: the next frame is tracked in it.
+  const sdf_tracker::TrackingStatus next = publishDeskFrame(700.0 + 3 / 30.0, 3 / 30.0);
+  EXPECT_EQ(next.status, sdf_tracker::TrackingStatus::OK) << next.status_text;
+  EXPECT_EQ(next.status_text.find("first frame"), std::string::npos) << next.status_text;
 }
 
 TEST_F(NodeTest, SaveVolumeRegionWritesTheBoxGivenInTheMapFrame) {

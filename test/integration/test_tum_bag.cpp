@@ -187,6 +187,37 @@ TEST_F(TumBagTest, WithWheelOdometryTheTrackerPublishesMapToOdomAndAnEkfReadyOdo
                                   kMinProcessedFractionWalking, kMaxAteDifference_m, &wheels);
 }
 
+TEST_F(TumBagTest, WithoutItsOdometryNoFrameWaitsForItAndTheDiagnosticsNameTheMissingTransform) {
+  // Issue 44: with ~odom_frame set and no odom -> base_link in tf, each frame waited 0.1 s for it,
+  // 70 % of the frames were dropped, and /diagnostics blamed the tracker's speed.
+  st::test::LaunchWatch watch(nh_);
+  RobotWatch robot(nh_);
+  ros::AsyncSpinner spinner(1);
+  spinner.start();
+  waitForPlayback(watch);
+  if (HasFatalFailure()) return;
+
+  std::lock_guard<std::mutex> lock(watch.mutex);
+  std::lock_guard<std::mutex> robot_lock(robot.mutex);
+  watch.expectOneParentPerFrame();
+  EXPECT_EQ(watch.parents.count("odom"), 0u) << "no map -> odom without an odometry to correct";
+  EXPECT_EQ(watch.predicted_by_odometry, 0u);
+  const uint32_t received = watch.framesReceivedWhileWatched();
+  ASSERT_GT(received, 0u);
+  const double processed = 1.0 - static_cast<double>(watch.framesDroppedWhileWatched()) / received;
+  std::cout << "[ figures  ] without odometry: " << watch.statuses << " frames processed, "
+            << watch.framesDroppedWhileWatched() << " of " << received << " dropped\n";
+  EXPECT_GE(processed, kMinProcessedFractionWalking) << "frames waited for the missing odometry";
+  EXPECT_GE(watch.poses.size(), watch.statuses * 9 / 10) << "the frames are tracked";
+  const std::string odometry = "sdf_tracker: odometry";
+  ASSERT_TRUE(robot.worst_level.count(odometry)) << "no diagnostics \"" << odometry << "\"";
+  EXPECT_EQ(robot.worst_level[odometry], diagnostic_msgs::DiagnosticStatus::WARN) << robot.worst_message[odometry];
+  EXPECT_NE(robot.worst_message[odometry].find("no odom -> base_link"), std::string::npos)
+      << robot.worst_message[odometry];
+  EXPECT_EQ(robot.worst_message["sdf_tracker: frames"].find("slower than the camera"), std::string::npos)
+      << robot.worst_message["sdf_tracker: frames"];
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {

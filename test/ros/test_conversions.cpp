@@ -330,6 +330,17 @@ TEST(Odometry, TwistFromSuccessivePosesAndAHeldPoseGrowsItsCovariance) {
   EXPECT_NEAR(held.pose.covariance[0], std::pow(1e-3 + 0.5 * kHeldSpeed_mps, 2), 1e-9);
   EXPECT_NEAR(held.pose.covariance[35], std::pow(1e-3 + 0.5 * kHeldTurnRate_radps, 2), 1e-9);
   EXPECT_GE(held.twist.covariance[0], 1e5);
+
+  // Issue 44: frames missing for 2 s (blank depth is dropped, no message goes out), then tracked
+  // again: the motion over the gap says nothing of the velocity now (it was 2e-6, smaller than a
+  // normal frame's).
+  OdometryBuilder gap_builder("map");
+  gap_builder.build(20.0, "base_link", T, tracked);
+  const nav_msgs::Odometry after_gap = gap_builder.build(22.0, "base_link", T, tracked);
+  EXPECT_GE(after_gap.twist.covariance[0], 1e5);
+  EXPECT_GE(after_gap.twist.covariance[35], 1e5);
+  const nav_msgs::Odometry next = gap_builder.build(22.0 + kMaxTwistInterval_s, "base_link", T, tracked);
+  EXPECT_NEAR(next.twist.covariance[7], 2e-6 / std::pow(kMaxTwistInterval_s, 2), 1e-9) << "within the interval";
 }
 
 TEST(Frames, PosesRoundTripThroughMessages) {

@@ -19,6 +19,7 @@
 #include "sdf_tracker/cli/tracker_alone.h"
 #include "sdf_tracker/io/depth_png.h"
 #include "sdf_tracker/io/files.h"
+#include "sdf_tracker/io/map_file.h"
 #include "sdf_tracker/io/sdfmap_file.h"
 #include "sdf_tracker/io/trajectory_file.h"
 #include "sdf_tracker/io/vti_file.h"
@@ -69,6 +70,21 @@ TEST(CommandLine, WholeNumbersBeyondIntAreRefused) {
   EXPECT_THROW(args.getInt("frames", 0), std::invalid_argument);
 }
 
+TEST(CommandLine, AnOptionGivenTwiceWithTwoValuesIsRefusedNotOneOfThemTaken) {
+  // Issue 44: --initial-pose and --odometry given twice used one of the two without a word.
+  const char* argv[] = {"tool", "--odometry", "a.txt", "--param", "A=1", "--odometry", "b.txt", "--param", "B=2"};
+  const CommandLine args(9, const_cast<char**>(argv), {"odometry", "param"}, {});
+  try {
+    args.get("odometry");
+    ADD_FAILURE() << "one of two values was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "--odometry is given twice (\"a.txt\" and \"b.txt\"): give it once");
+  }
+  EXPECT_EQ(args.getAll("param"), (std::vector<std::string>{"A=1", "B=2"})) << "repeatable options repeat";
+  const char* same[] = {"tool", "--odometry", "a.txt", "--odometry", "a.txt"};
+  EXPECT_EQ(CommandLine(5, const_cast<char**>(same), {"odometry"}, {}).get("odometry"), "a.txt") << "no ambiguity";
+}
+
 TEST(OptionValues, EachValueIsReadWholeOrRefusedNamingTheOptionAndTheText) {
   using namespace sdf_tracker::tools;
   const Eigen::Isometry3d pose = parsePose("--initial-pose", "0.5,0,-1,0,0,0.7071068,0.7071068");
@@ -89,6 +105,10 @@ TEST(OptionValues, EachValueIsReadWholeOrRefusedNamingTheOptionAndTheText) {
   EXPECT_NE(refusal([] { parseBox("--volume-region", "0,0,0,-1,1,1"); }).find("--volume-region: expected"),
             std::string::npos) << "X0 < X1";
   EXPECT_NE(refusal([] { parseNumberList("--distortion", "0.1,x"); }).find("--distortion"), std::string::npos);
+  // Issue 44: a trailing comma was taken where an empty field inside was refused.
+  EXPECT_EQ(refusal([] { parsePose("--initial-pose", "0,0,0,0,0,0,1,"); }), "--initial-pose: expected a number, got \"\"");
+  EXPECT_EQ(refusal([] { parsePose("--initial-pose", ",0,0,0,0,0,0,1"); }), "--initial-pose: expected a number, got \"\"");
+  EXPECT_EQ(refusal([] { parsePose("--initial-pose", "0,0,,0,0,0,1"); }), "--initial-pose: expected a number, got \"\"");
   const sdf_tracker::PinholeCamera camera =
       parseIntrinsics("--intrinsics", "500,501,320,240,320,240", sdf_tracker::PinholeCamera::tumFreiburg1());
   EXPECT_EQ(camera.width, 320);
@@ -119,6 +139,29 @@ TEST(OdometryTrack, PosesBetweenTheRecordedOnesAreInterpolatedAndGapsAndBadFiles
     EXPECT_NE(std::string(e.what()).find("--odometry " + path + ": the stamps do not increase"), std::string::npos)
         << e.what();
   }
+}
+
+TEST(OdometryTrack, AJumpIsSaidAndATrackThatMeetsNoFrameIsRefused) {
+  // Issue 44: an odometry on another clock was used for no frame with exit 0 and no word, and a
+  // jump of 100 m between two poses passed without a warning.
+  const std::string path = ::testing::TempDir() + "/sdf_tracker_odometry_jump.txt";
+  Eigen::Isometry3d far = Eigen::Isometry3d::Identity();
+  far.translation() = Eigen::Vector3d(100.0, 0.0, 0.0);
+  sdf_tracker::io::writeTrajectory(path, {{1.0, Eigen::Isometry3d::Identity()}, {1.033, far}, {1.066, far}});
+  const auto track = sdf_tracker::tools::OdometryTrack::read(path);
+  EXPECT_EQ(track.jumps(), "--odometry " + path + ": 1 jump faster than 10 m/s, the largest 100 m in 0.033 s at "
+                           "1.033 s (a reset or a glitch of the odometry? the tracker takes it as a prediction only)");
+  EXPECT_EQ(track.requireCoverage({1.0, 1.05, 5.0}), 2u) << "frames outside the track have none";
+  try {
+    track.requireCoverage({1001.0, 1002.0});
+    ADD_FAILURE() << "a track that meets no frame was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "--odometry " + path + ": its 3 poses (1.000 .. 1.066 s) give a pose for none of "
+                                     "the 2 frames (1001.000 .. 1002.000 s): another clock, or gaps longer than "
+                                     "0.100 s everywhere");
+  }
+  sdf_tracker::io::writeTrajectory(path, {{1.0, Eigen::Isometry3d::Identity()}, {1.033, Eigen::Isometry3d::Identity()}});
+  EXPECT_EQ(sdf_tracker::tools::OdometryTrack::read(path).jumps(), "");
 }
 
 TEST(TrackerAlone, AnErrorCountsAsWithinTwoSigmaByTheCovarianceOfItsDirection) {
@@ -267,7 +310,8 @@ TEST(Offline, AnUnreadableImageIsABadFrameAndTheRunGoesOn) {
                             third),
             std::string::npos)
       << run.output;
-  EXPECT_EQ(io::readTrajectory(output + "/trajectory.txt").size(), 4u) << "a pose for every frame";
+  EXPECT_EQ(io::readTrajectory(output + "/trajectory.txt").size(), 3u)
+      << "estimates only: the unreadable frame has none (README: \"Estimates and held poses\")";
 }
 
 TEST(Offline, ARunInWhichNotEvenTheFirstFrameHoldsDepthFails) {
@@ -284,18 +328,55 @@ TEST(Offline, ARunInWhichNotEvenTheFirstFrameHoldsDepthFails) {
   EXPECT_NE(run.output.find("no frame could be tracked"), std::string::npos) << run.output;
 }
 
+TEST(Offline, AnOdometryOnAnotherClockIsRefusedByName) {
+  const std::string sequence = shortSequence(3);
+  const std::string odometry = test::scratchDirectory("odometry_clock") + "/odometry.txt";
+  Eigen::Isometry3d far = Eigen::Isometry3d::Identity();
+  far.translation() = Eigen::Vector3d(100.0, 0.0, 0.0);
+  io::writeTrajectory(odometry, {{5000.0, Eigen::Isometry3d::Identity()}, {5000.033, far}});
+  const ToolRun run = offline("--sequence " + sequence + " --output " + test::scratchDirectory("odometry_clock_run") +
+                              " --odometry " + odometry);
+  EXPECT_EQ(run.exit_code, 1) << run.output;
+  EXPECT_NE(run.output.find("--odometry " + odometry + ": its 2 poses (5000.000 .. 5000.033 s) give a pose for none of "
+                            "the 3 frames"),
+            std::string::npos)
+      << run.output;
+}
+
 TEST(Offline, ARunInWhichNoFrameFitsTheLoadedMapFails) {
-  // A valid map that holds nothing: every frame, the first too, is tracked in it and fits nowhere.
+  // A valid map that holds no surface, only free space 50 m away: every frame, the first too, is
+  // tracked in it and fits nowhere, and the search has nothing to search.
   VolumeConfig config;
   config.type = MapType::kSparse;
-  const std::string map = test::scratchDirectory("empty_map") + "/empty.sdfmap";
-  io::writeSparseMap(map, SparseTsdfMap(config));
-  const ToolRun run = offline("--sequence " + shortSequence(3) + " --output " + test::scratchDirectory("missed") +
-                              " --load-volume " + map);
+  SparseTsdfMap far_free_space(config);
+  for (Voxel& voxel : far_free_space.allocate(SparseTsdfMap::BlockIndex(300, 0, 0)).voxels) voxel = {0.1f, 1.0f};
+  const std::string dir = test::scratchDirectory("no_surface_map");
+  io::writeMap(dir + "/free.sdfmap", far_free_space);
+  const std::string output = test::scratchDirectory("missed");
+  const ToolRun run =
+      offline("--sequence " + shortSequence(3) + " --output " + output + " --load-volume " + dir + "/free.sdfmap");
   EXPECT_EQ(run.exit_code, 1) << run.output;
   EXPECT_NE(run.output.find("tracked ok 0, failed 3"), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("no frame could be tracked in the loaded map: accuracy not evaluated"), std::string::npos)
       << run.output;
+  // Issue 44: every frame says why it failed (the first one was bad_input with no message).
+  std::ifstream frames(output + "/frames.csv");
+  std::string line;
+  std::getline(frames, line);
+  for (int i = 0; i < 3 && std::getline(frames, line); ++i) {
+    EXPECT_EQ(line.find("bad_input"), std::string::npos) << line;
+    EXPECT_NE(line.back(), ',') << "a message ends the row: " << line;
+  }
+
+  // An empty map is refused when loaded, before any frame: no run in it could ever track.
+  VolumeConfig empty_config;
+  empty_config.type = MapType::kSparse;
+  io::writeSparseMap(dir + "/empty.sdfmap", SparseTsdfMap(empty_config));
+  const ToolRun empty = offline("--sequence " + shortSequence(3) + " --output " + test::scratchDirectory("empty_load") +
+                                " --load-volume " + dir + "/empty.sdfmap");
+  EXPECT_EQ(empty.exit_code, 1) << empty.output;
+  EXPECT_NE(empty.output.find("empty.sdfmap: an empty map: no voxel holds an observation"), std::string::npos)
+      << empty.output;
 }
 
 TEST(Offline, ASavedMapIsLoadedByTheNextRunAndACorruptOneIsRefusedByName) {
@@ -305,18 +386,21 @@ TEST(Offline, ASavedMapIsLoadedByTheNextRunAndACorruptOneIsRefusedByName) {
       offline("--sequence " + sequence + " --output " + first + " --save-map --param MapType=sparse");
   ASSERT_EQ(mapping.exit_code, 0) << mapping.output;
   ASSERT_TRUE(fs::exists(first + "/map.sdfmap"));
-  const ToolRun reuse = offline("--sequence " + sequence + " --output " + test::scratchDirectory("load_map") +
-                                " --load-volume " + first + "/map.sdfmap");
+  const std::string reuse_dir = test::scratchDirectory("load_map");
+  const ToolRun reuse =
+      offline("--sequence " + sequence + " --output " + reuse_dir + " --load-volume " + first + "/map.sdfmap");
   EXPECT_EQ(reuse.exit_code, 0) << reuse.output;
   EXPECT_NE(reuse.output.find("sparse map of 0.02 m voxels"), std::string::npos)
       << "the file's storage replaces the configured dense grid:\n" << reuse.output;
   // Where the camera is in it is not known: the first frames search for it and fuse nothing, and
   // the frame that confirms the third fit is tracked.
   EXPECT_NE(reuse.output.find("tracked ok 4, failed 2"), std::string::npos) << reuse.output;
-  EXPECT_NE(reuse.output.find("place memory: 1 keyframes from"), std::string::npos) << reuse.output;
+  EXPECT_NE(reuse.output.find("holds 1 keyframes in its place memory"), std::string::npos) << reuse.output;
   EXPECT_NE(reuse.output.find("relocalisation: 3 frames searched the map for the camera"), std::string::npos)
       << reuse.output;
   EXPECT_NE(reuse.output.find("1 found it"), std::string::npos) << reuse.output;
+  // Issue 44: the searching frames have no pose; the held one was written as if estimated.
+  EXPECT_EQ(io::readTrajectory(reuse_dir + "/trajectory.txt").size(), 4u) << "estimates only";
   const ToolRun held = offline("--sequence " + sequence + " --output " + test::scratchDirectory("load_map_held") +
                                " --load-volume " + first + "/map.sdfmap --param Relocalise=false");
   EXPECT_NE(held.output.find("tracked ok 6"), std::string::npos) << "without the search, the first frame is tracked "
@@ -326,6 +410,13 @@ TEST(Offline, ASavedMapIsLoadedByTheNextRunAndACorruptOneIsRefusedByName) {
   const ToolRun told = offline("--sequence " + sequence + " --output " + test::scratchDirectory("told") +
                                " --load-volume " + first + "/map.sdfmap --initial-pose 0.01,0,0,0,0,0,1");
   EXPECT_NE(told.output.find("tracked ok 4, failed 2"), std::string::npos) << told.output;
+  // Issue 44: a pose far from the map was taken and logged with 300 digits.
+  const ToolRun far = offline("--sequence " + sequence + " --output " + test::scratchDirectory("told_far") +
+                              " --load-volume " + first + "/map.sdfmap --initial-pose 1e300,0,0,0,0,0,1");
+  EXPECT_EQ(far.exit_code, 1) << far.output;
+  EXPECT_NE(far.output.find("--initial-pose 1e300,0,0,0,0,0,1: the camera at (1e+300"), std::string::npos) << far.output;
+  EXPECT_NE(far.output.find(") m would be 1e+300 m from the map"), std::string::npos) << far.output;
+  EXPECT_NE(far.output.find("beyond MaxDepth 8 m"), std::string::npos) << far.output;
   for (const auto& [options, message] : std::vector<std::pair<std::string, std::string>>{
            {" --initial-pose 0,0,0,0,0,0,1", "--initial-pose places the camera in a loaded map (--load-volume)"},
            {" --load-volume " + first + "/map.sdfmap --initial-pose 0,0,0,0,0,0,1 --param Relocalise=false",

@@ -40,6 +40,16 @@ TsdfVolume sphereVolume() {
 
 using test::writeFile;
 
+/// What `action` threw as std::runtime_error, or "" when it threw nothing.
+std::string runtimeErrorOf(const std::function<void()>& action) {
+  try {
+    action();
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
 TEST(Surface, MeshAndCloudLieOnTheZeroLevelSetWithOutwardNormals) {
   const TsdfVolume volume = sphereVolume();
   const TriangleMesh mesh = extractMesh(volume);
@@ -372,24 +382,74 @@ TEST(Io, TheMapFileKeepsThePlaceMemoryAndAFirstVersionFileStillLoads) {
   EXPECT_TRUE(has(sparseMapError(dir, v2.substr(0, v2.size() - 30)), "3 keyframes"));
 }
 
+TEST(Io, AnEmptyMapIsNeitherWrittenNorLoaded) {
+  // Issue 44: a node that mapped nothing answered save_volume with success and a 120-byte map,
+  // which then loaded and replaced the live map: the node never tracked again.
+  const std::string dir = test::scratchDirectory("empty_map");
+  VolumeConfig sparse_config;
+  sparse_config.type = MapType::kSparse;
+  const SparseTsdfMap empty_sparse(sparse_config);
+  VolumeConfig dense_config;
+  dense_config.dims = Eigen::Vector3i(8, 8, 8);
+  const TsdfVolume empty_dense(dense_config);
+  for (const TsdfMap* map : {static_cast<const TsdfMap*>(&empty_sparse), static_cast<const TsdfMap*>(&empty_dense)}) {
+    for (const std::string name : {"/out.sdfmap", "/out.vti"}) {
+      EXPECT_EQ(runtimeErrorOf([&] { io::writeMap(dir + name, *map); }),
+                dir + name + ": not written: nothing is mapped yet (no voxel holds an observation)");
+      EXPECT_FALSE(std::ifstream(dir + name).good()) << name << ": no file, not even a partial one";
+    }
+  }
+  // Such files, from an older build or written directly, are refused when loaded, by name.
+  io::writeSparseMap(dir + "/empty.sdfmap", empty_sparse);
+  io::writeVti(dir + "/empty.vti", empty_dense);
+  for (const std::string name : {"/empty.sdfmap", "/empty.vti"}) {
+    EXPECT_EQ(runtimeErrorOf([&] { io::readMap(dir + name); }),
+              dir + name + ": an empty map: no voxel holds an observation, nothing to track against");
+  }
+  // A block allocated but never observed is as empty as none.
+  SparseTsdfMap unobserved(sparse_config);
+  unobserved.allocate(SparseTsdfMap::BlockIndex(0, 0, 0));
+  EXPECT_TRUE(unobserved.observesNothing());
+  unobserved.allocate(SparseTsdfMap::BlockIndex(0, 0, 0)).voxels[5].weight = 1.0f;
+  EXPECT_FALSE(unobserved.observesNothing());
+  EXPECT_FALSE(sphereVolume().observesNothing());
+}
+
+TEST(Io, WhatALoadedMapsPlaceMemoryBringsIsSaidAsItIs) {
+  PlaceMemory none_kept;
+  const PlaceMemory places = patternedPlaces();
+  EXPECT_EQ(io::describeLoadedPlaces(nullptr, true),
+            "holds no place memory (a .vti, or a .sdfmap of format version 1): the camera is searched for from the "
+            "map's start pose only");
+  // Issue 44: a version 2 file whose first session kept no keyframe was called a .vti or version 1.
+  EXPECT_EQ(io::describeLoadedPlaces(&none_kept, true),
+            "holds a place memory without keyframes (its first session stored none): the camera is searched for "
+            "from the map's start pose only");
+  EXPECT_EQ(io::describeLoadedPlaces(&places, true),
+            "holds 3 keyframes in its place memory: the camera is searched for in it, and nothing is fused until it "
+            "is found");
+  EXPECT_EQ(io::describeLoadedPlaces(&places, false),
+            "holds 3 keyframes in its place memory; Relocalise is off: tracking starts at the map's start pose");
+
+  // What readMap hands over for each: a version 2 file without keyframes has a place memory.
+  const std::string dir = test::scratchDirectory("places_described");
+  io::writeMap(dir + "/none.sdfmap", patternedSparseMap(), &none_kept);
+  std::unique_ptr<PlaceMemory> loaded;
+  io::readMap(dir + "/none.sdfmap", false, &loaded);
+  ASSERT_TRUE(loaded);
+  EXPECT_TRUE(loaded->empty());
+}
+
 TEST(Io, AFifoOrAFolderGivenAsAFileIsRefusedWithoutBlocking) {
   const std::string dir = test::scratchDirectory("not_a_file");
   ASSERT_EQ(::mkfifo((dir + "/map.sdfmap").c_str(), 0644), 0);
   ::mkdir((dir + "/folder.vti").c_str(), 0755);
-  auto error = [](const std::function<void()>& read) {
-    try {
-      read();
-    } catch (const std::runtime_error& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
-  EXPECT_EQ(error([&] { io::readMap(dir + "/map.sdfmap"); }),
+  EXPECT_EQ(runtimeErrorOf([&] { io::readMap(dir + "/map.sdfmap"); }),
             dir + "/map.sdfmap: is not a regular file (a FIFO or a device?)");
-  EXPECT_EQ(error([&] { io::readMap(dir + "/folder.vti"); }), dir + "/folder.vti: is a folder, not a file");
-  EXPECT_NE(error([&] { io::readPlyMesh(dir + "/map.sdfmap"); }), "");
-  EXPECT_NE(error([&] { io::readDepthPng(dir + "/map.sdfmap", 5000.0); }), "");
-  EXPECT_NE(error([&] { io::readTrajectory(dir + "/map.sdfmap"); }), "");
+  EXPECT_EQ(runtimeErrorOf([&] { io::readMap(dir + "/folder.vti"); }), dir + "/folder.vti: is a folder, not a file");
+  EXPECT_NE(runtimeErrorOf([&] { io::readPlyMesh(dir + "/map.sdfmap"); }), "");
+  EXPECT_NE(runtimeErrorOf([&] { io::readDepthPng(dir + "/map.sdfmap", 5000.0); }), "");
+  EXPECT_NE(runtimeErrorOf([&] { io::readTrajectory(dir + "/map.sdfmap"); }), "");
 }
 
 TEST(Io, TrajectoryRoundTripsAndBadLinesAreNamed) {

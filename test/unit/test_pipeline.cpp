@@ -64,6 +64,23 @@ TEST(Pipeline, BadFramesLeaveMapAndPoseUntouched) {
   EXPECT_TRUE(pipeline.pose().isApprox(Eigen::Isometry3d::Identity()));
 }
 
+TEST(Pipeline, AMapThatObservedNothingIsRefusedAndTheLiveMapKept) {
+  SdfPipeline pipeline(coarseGridPipeline());
+  const PinholeCamera camera = test::testCamera();
+  ASSERT_TRUE(pipeline.processFrame(DepthImage(camera.width, camera.height, 1.0f), camera, 0.0).initialised_map);
+  VolumeConfig empty;
+  empty.type = MapType::kSparse;
+  try {
+    pipeline.setMap(makeMap(empty));
+    ADD_FAILURE() << "an empty map was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "the map holds no observed voxel: nothing to track against");
+  }
+  EXPECT_GT(test::totalWeight(pipeline.map()), 0.0) << "the live map stays";
+  const FrameReport next = pipeline.processFrame(DepthImage(camera.width, camera.height, 1.0f), camera, 1 / 30.0);
+  EXPECT_FALSE(next.initialised_map) << "tracked in the map it had";
+}
+
 TEST(Pipeline, TheFirstFrameAnchorsTheMapWithTheSmallestCovarianceNotNone) {
   SdfPipeline pipeline(coarseGridPipeline());
   const PinholeCamera camera = test::testCamera();
@@ -174,6 +191,14 @@ TEST(Pipeline, AfterFramesMissingLongerThanThePredictionBridgesTheHeldPosesFitIs
   const FrameReport next = pipeline.processFrame(frameAt(10 + confirm), camera, t);
   EXPECT_TRUE(next.track.ok()) << next.track.message;
   EXPECT_TRUE(next.fused);
+
+  // A camera that sends a frame a second (a throttled topic) misses none: each is taken at once.
+  SdfPipeline slow(config);
+  for (int i = 0; i < 5; ++i) {
+    const FrameReport report = slow.processFrame(frameAt(i), camera, 2.0 * config.max_prediction_gap_s * i);
+    EXPECT_TRUE(report.track.ok()) << "frame " << i << ": " << report.track.message;
+    EXPECT_TRUE(report.fused) << "frame " << i;
+  }
 }
 
 TEST(Pipeline, WhileFramesFailTheHeldPoseMovesOnWithTheOtherOdometry) {

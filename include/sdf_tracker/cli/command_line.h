@@ -18,6 +18,8 @@ class CommandLine {
               const std::vector<std::string>& flags, const std::vector<std::string>& positional_names = {});
 
   bool has(const std::string& name) const { return values_.count(name) > 0; }
+  /// The option's value; throws std::invalid_argument when it was given twice with different
+  /// values (only getAll() options repeat).
   std::string get(const std::string& name, const std::string& fallback = "") const;
   std::vector<std::string> getAll(const std::string& name) const;
   /// Throws std::invalid_argument naming the option when missing.

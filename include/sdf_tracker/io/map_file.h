@@ -20,4 +20,10 @@ std::unique_ptr<TsdfMap> readMap(const std::string& path, bool compact_voxels = 
                                  std::unique_ptr<PlaceMemory>* places = nullptr,
                                  const PlaceMemoryConfig& places_config = PlaceMemoryConfig());
 
+/// What a loaded map's place memory (readMap's `places`: none, or with its keyframes) brings for
+/// finding the camera in it, said after the file's name: "holds 12 keyframes in its place memory:
+/// the camera is searched for in it, ...", or that it holds none and why, and what Relocalise
+/// then does.
+std::string describeLoadedPlaces(const PlaceMemory* places, bool relocalise);
+
 }  // namespace sdf_tracker::io

@@ -216,6 +216,7 @@ class SparseTsdfMap : public TsdfMap {
   std::unique_ptr<FieldSampler> sampler(const Eigen::AlignedBox3f& region_W) const override;
   void clear() override;
   size_t voxelCount() const override { return blocks_.size() * kBlockVoxels; }
+  bool observesNothing() const override;
   size_t memoryBytes() const override;
   std::unique_ptr<TsdfMap> clone() const override { return std::make_unique<SparseTsdfMap>(*this); }
 

@@ -126,6 +126,9 @@ class TsdfMap {
   virtual void clear() = 0;
   /// Voxels stored (observed or not).
   virtual size_t voxelCount() const = 0;
+  /// No voxel holds an observation (weight > 0): a new or cleared map, or an empty file's. There
+  /// is nothing in it to track against, save or show.
+  virtual bool observesNothing() const = 0;
   /// Bytes held by voxel storage.
   virtual size_t memoryBytes() const = 0;
   virtual std::unique_ptr<TsdfMap> clone() const = 0;

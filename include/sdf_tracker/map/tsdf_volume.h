@@ -58,6 +58,7 @@ class TsdfVolume : public TsdfMap {
 
   const Eigen::Vector3i& dims() const { return config_.dims; }
   size_t voxelCount() const override { return voxel_count_; }
+  bool observesNothing() const override;
   bool compact() const { return config_.compact_voxels; }
   size_t memoryBytes() const override {
     return compact() ? compact_.size() * sizeof(CompactVoxel) : voxels_.size() * sizeof(Voxel);

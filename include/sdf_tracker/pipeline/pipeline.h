@@ -48,10 +48,10 @@ struct PipelineConfig {
   /// prediction fails, the frame is tracked again from the last pose. Off: from the last pose.
   bool predict_motion = false;
   /// No prediction across a gap longer than this [s]: the last motion says little by then. With
-  /// relocalise on, a frame taken longer than this after the last tracked one (the view blocked
-  /// while the camera was carried, a recording cut) is treated as after a long loss: the camera
-  /// may be anywhere, and a fit from the held pose must be confirmed like any candidate, unless
-  /// another odometry measured the motion.
+  /// relocalise on, a frame taken longer than this, and than ten of the camera's frame intervals,
+  /// after the last tracked one (the view blocked while the camera was carried, a recording cut)
+  /// is treated as after a long loss: the camera may be anywhere, and a fit from the held pose
+  /// must be confirmed like any candidate, unless another odometry measured the motion.
   double max_prediction_gap_s = 0.5;
   /// How far another odometry (processFrame's T_odom_C) is trusted: the standard deviation of the
   /// motion it measures between two frames, as a fraction of the distance and of the angle
@@ -182,7 +182,8 @@ class SdfPipeline {
   /// Forgets where the camera is: the next frames search the map for it (needs relocalise on),
   /// trying `guess` first when given (a pose the user knows), and fuse nothing until a candidate
   /// is confirmed. A guess is verified like any candidate. Throws std::logic_error with
-  /// relocalise off or before the map holds anything.
+  /// relocalise off or before the map holds anything, and std::invalid_argument (changing
+  /// nothing) for a guess further than max_depth_m from every voxel of the map.
   void relocalise(const std::optional<Eigen::Isometry3d>& guess = std::nullopt);
   /// The camera's pose is being searched for (after a loss with relocalise on, in a loaded map,
   /// after relocalise()).
@@ -241,6 +242,8 @@ class SdfPipeline {
   MotionModel motion_;
   /// When the frame whose pose T_W_C_ holds was taken (NaN: unknown, or frames without times).
   double held_pose_timestamp_s_ = std::numeric_limits<double>::quiet_NaN();
+  /// From the tracked frame before that one to it (the camera's rate, as frames get tracked).
+  double tracked_interval_s_ = std::numeric_limits<double>::quiet_NaN();
   /// The other odometry's camera pose (processFrame's T_odom_C) at the frame whose pose T_W_C_
   /// holds; none when that frame came without one.
   std::optional<Eigen::Isometry3d> T_odom_C_held_;

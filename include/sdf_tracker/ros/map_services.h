@@ -17,10 +17,6 @@
 
 namespace sdf_tracker_ros {
 
-/// What a loaded map brings for finding the camera in it, said after "tracking against FILE":
-/// its keyframes, or that it has none, and whether the camera is searched for (Relocalise).
-std::string describePlaces(size_t keyframes, bool relocalise);
-
 /// The node's services (~reset, ~relocalise, ~save_mesh, ~save_volume, ~save_volume_region,
 /// ~load_volume) and
 /// its files written at shut-down (trajectory, mesh, cloud, OutputTriangles, OutputVolume). Saving

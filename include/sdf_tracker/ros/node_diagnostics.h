@@ -20,21 +20,29 @@ namespace sdf_tracker_ros {
 ///   when tracked (a degenerate view too, when the robot's odometry gave what it leaves open),
 ///   WARN for a frame that failed, a degenerate one without odometry, or a search under way,
 ///   ERROR once tracking is lost (~status's `lost`).
+/// - "<node>: odometry", with ~odom_frame only: OK while each frame finds the robot's odometry in
+///   tf, WARN naming the missing transform and tf's reason while frames come without it.
 class NodeDiagnostics {
  public:
   static constexpr double kStaleAfter_s = 3.0;
   /// Seconds of frames the rates are measured over.
   static constexpr double kRateWindow_s = 5.0;
 
-  /// `hardware_id`: the depth topic the node listens on.
-  NodeDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& hardware_id);
+  /// `hardware_id`: the depth topic the node listens on. `odometry_transform`: the robot's
+  /// odometry the node reads ("odom -> base_link"), or empty for none (no odometry task).
+  NodeDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& hardware_id,
+                  const std::string& odometry_transform = "");
 
   /// A frame's ~status, and the seconds from its image's stamp to its outputs. Frame thread.
   void frameProcessed(const sdf_tracker::TrackingStatus& status, double latency_s);
+  /// A frame's odometry lookup: `problem` is why none was found (PoseBroadcaster::
+  /// odometryProblem()), empty when it was. Frame thread.
+  void odometryLookedUp(const std::string& problem);
 
  private:
   void frames(diagnostic_updater::DiagnosticStatusWrapper& stat);
   void tracking(diagnostic_updater::DiagnosticStatusWrapper& stat);
+  void odometry(diagnostic_updater::DiagnosticStatusWrapper& stat);
   /// Forgets the processed frames older than the rate window.
   void trim(const ros::WallTime& now);
 
@@ -50,6 +58,10 @@ class NodeDiagnostics {
   std::deque<Processed> window_;
   sdf_tracker::TrackingStatus last_;
   bool any_ = false;
+  std::string odometry_transform_;
+  std::string odometry_problem_;  ///< the last frame's
+  uint32_t frames_with_odometry_ = 0, frames_without_odometry_ = 0, without_odometry_in_a_row_ = 0;
+  bool odometry_looked_up_ = false;
 };
 
 }  // namespace sdf_tracker_ros

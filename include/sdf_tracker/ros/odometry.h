@@ -20,6 +20,9 @@ using Covariance6d = Eigen::Matrix<double, 6, 6>;
 /// or a robot at walking speed).
 constexpr double kHeldSpeed_mps = 1.0;
 constexpr double kHeldTurnRate_radps = 1.0;
+/// Two messages further apart than this (frames dropped as bad input, blank depth) say nothing of
+/// the velocity now: the twist between them is stated unknown, not averaged over the gap.
+constexpr double kMaxTwistInterval_s = 0.5;
 
 /// The tracker's covariance of the camera pose (TrackResult::covariance: [rotation; translation]
 /// about the camera centre along the tracker's world axes) as the covariance of the pose of a
@@ -43,7 +46,8 @@ class OdometryBuilder {
   /// for a tracked frame; none for a frame whose pose is held (tracking failed): the last tracked
   /// frame's covariance grown by the time since (grownCovariance). The twist is the motion since
   /// the previous message (its covariance the two poses' summed over the time squared); the first
-  /// message's, or one after a held frame, says nothing (kUnconstrained* variance).
+  /// message's, a held frame's, or one more than kMaxTwistInterval_s after the previous message
+  /// says nothing (kUnconstrainedVariance).
   nav_msgs::Odometry build(double stamp_s, const std::string& child_frame_id, const Eigen::Isometry3d& T_map_body,
                            const std::optional<Covariance6d>& covariance);
   /// Forgets the previous poses (after ~reset or a loaded map).

@@ -54,22 +54,30 @@ bool isGravityReading(const Eigen::Vector3d& acceleration);
 /// map -> odom -> base -> camera is the estimate. It never gives a frame a
 /// second parent: when the frame it would publish already has another parent, it says once which
 /// frame, which parent and which parameter to set, and publishes no tf (pose and path go on).
-/// Also publishes ~pose, a bounded ~path and ~odom (nav_msgs/Odometry of the base, with
-/// covariance). Called from the frame thread only.
+/// Also publishes ~odom (nav_msgs/Odometry of the base, with covariance), and for estimates only
+/// (not held poses) ~pose and a bounded ~path. Called from the frame thread only.
 class PoseBroadcaster {
  public:
   PoseBroadcaster(ros::NodeHandle nh, ros::NodeHandle pnh, const NodeOptions& options);
 
   /// With ~odom_frame: the camera's pose in the robot's odometry frame at `stamp` (odom -> base
-  /// from the robot's odometry, base -> camera its mounting, through tf), waiting up to
-  /// kOdometryWait_s for it. None without ~odom_frame, or, said in the log, while tf lacks it.
+  /// from the robot's odometry, base -> camera its mounting, through tf). While the odometry
+  /// flows (tf's latest odom -> base is less than kOdometryStale_s older than the image) it waits
+  /// up to kOdometryWait_s for the odometry to catch up with the image; otherwise it does not
+  /// wait, so that a missing odometry never holds frames up. None without ~odom_frame, or while
+  /// tf lacks it: said in the log when it starts and when it ends, and by odometryProblem().
   std::optional<Eigen::Isometry3d> odometryCameraPose(const ros::Time& stamp, const std::string& image_frame);
   static constexpr double kOdometryWait_s = 0.1;
+  static constexpr double kOdometryStale_s = 1.0;
+  /// Why the last odometryCameraPose() found no odometry (the transform missing and tf's
+  /// reason), or "" when it found one or ~odom_frame is not set.
+  const std::string& odometryProblem() const { return odometry_problem_; }
 
   /// The estimate T_W_C (tracker world <- camera optical frame) for an image of `image_frame`
   /// (its frame_id) at `stamp`, with its covariance (TrackResult::covariance) when the frame was
-  /// tracked, none when the pose is held, and the camera's pose in the robot's odometry frame at
-  /// that stamp (odometryCameraPose) when there is one. Returns the camera's pose in the map frame.
+  /// tracked, none when the pose is held (then it goes on tf and ~odom, with a grown covariance,
+  /// but not on ~pose or ~path), and the camera's pose in the robot's odometry frame at that stamp
+  /// (odometryCameraPose) when there is one. Returns the camera's pose in the map frame.
   Eigen::Isometry3d publish(const ros::Time& stamp, const std::string& image_frame, const Eigen::Isometry3d& T_W_C,
                             const std::optional<Covariance6d>& covariance_W,
                             const std::optional<Eigen::Isometry3d>& T_odom_C);
@@ -111,6 +119,9 @@ class PoseBroadcaster {
   /// that built the map.
   bool map_frame_fixed_ = false;
   std::set<std::string> refused_children_;
+  std::string odometry_problem_;
+  /// Frames in a row without odometry (odometryCameraPose), for the log.
+  size_t frames_without_odometry_ = 0;
 
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;

@@ -87,6 +87,10 @@ class TrackerServer {
   std::condition_variable mailbox_changed_;
   std::optional<Frame> pending_;
   std::optional<geometry_msgs::PoseWithCovarianceStamped> pending_pose_request_;
+  /// The last request received, and when: the same pose again within kRepeatedRequest_s is a
+  /// repeat (a burst from a script, a latched topic), not a new request to verify from scratch.
+  std::optional<geometry_msgs::PoseWithCovarianceStamped> last_pose_request_;
+  ros::WallTime last_pose_request_wall_;
   uint32_t frames_received_ = 0;
   uint32_t frames_dropped_ = 0;
   ros::WallTime last_image_wall_, last_info_wall_;
