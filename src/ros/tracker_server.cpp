@@ -318,9 +318,19 @@ void TrackerServer::process(const Frame& frame) {
   }
 
   const st::TrackResult& t = report.track;
-  const bool was_lost = lost_;
-  lost_ = static_cast<int>(status.consecutive_failures) >= kLostAfterFailedFrames;
-  if (lost_ && !was_lost) {
+  const bool was_lost = lost_, was_searching = searching_;
+  // A camera whose pose is not known yet (a loaded map, ~relocalise) is searched for, not lost:
+  // lost is for one that was tracked and then failed.
+  searching_ = !pose_known;
+  lost_ = pose_known && static_cast<int>(status.consecutive_failures) >= kLostAfterFailedFrames;
+  if (searching_ && !was_searching) {
+    ROS_WARN("sdf_tracker: searching the map for the camera; nothing is fused and no pose goes out until a place is "
+             "confirmed (%s)", statusText(t).c_str());
+  } else if (!searching_ && was_searching) {
+    ROS_INFO("sdf_tracker: found the camera in the map; tracking");
+  } else if (searching_) {
+    ROS_INFO_THROTTLE(10.0, "sdf_tracker: still searching the map for the camera: %s", statusText(t).c_str());
+  } else if (lost_ && !was_lost) {
     ROS_ERROR("sdf_tracker: tracking lost after %d failed frames (%s); holding the pose, fusing nothing, and "
               "relocalising as soon as the camera sees mapped geometry again",
               kLostAfterFailedFrames, statusText(t).c_str());

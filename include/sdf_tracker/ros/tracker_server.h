@@ -109,7 +109,10 @@ class TrackerServer {
   bool questioned_intrinsics_ = false;
   /// The camera last said in the log (said again when it changes).
   std::optional<sdf_tracker::PinholeCamera> announced_camera_;
+  /// Tracking failed kLostAfterFailedFrames in a row after the camera was tracked (~status lost).
   bool lost_ = false;
+  /// The camera's pose is not known (a loaded map, ~relocalise): it is searched for, not lost.
+  bool searching_ = false;
 
   std::unique_ptr<NodeDiagnostics> diagnostics_;
   std::unique_ptr<MapServices> services_;
