@@ -98,7 +98,7 @@ previous = None
 for r in rows:
     e = err.get(round(float(r["timestamp"]), 4))
     # An acceptance: a tracked frame right after one that searched.
-    if previous == "relocalising" and r["status"] in ("ok", "degenerate"):
+    if previous in ("relocalising", "ambiguous") and r["status"] in ("ok", "degenerate"):
         if e and (e[0] > 0.10 or e[1] > 10.0): false += 1
     if r["fused"] == "1" and e and e[0] > 0.10: fused_far += 1
     previous = r["status"]

@@ -24,7 +24,7 @@ sdf_tracker_part(tracking SOURCES motion_model tracker DEPENDS camera map)
 sdf_tracker_part(surface SOURCES chunked_mesh raycaster surface DEPENDS camera map)
 # Finding the camera again: the places the map was built from, and the search among them.
 sdf_tracker_part(places SOURCES place_descriptor place_memory DEPENDS camera)
-sdf_tracker_part(relocalisation SOURCES coarse_field relocaliser DEPENDS tracking surface places)
+sdf_tracker_part(relocalisation SOURCES coarse_field relocaliser view_agreement DEPENDS tracking surface places)
 sdf_tracker_part(pipeline SOURCES parameters pipeline DEPENDS fusion tracking surface relocalisation)
 
 # Around the tracker: files (OpenCV for PNG only), the synthetic scenes, trajectory errors.

@@ -336,9 +336,15 @@ std::vector<ParameterSpec> buildTable() {
                          "frames in a row a candidate must go on tracking before it is accepted", closed(1, 1000),
                          same(3), kLive, kAll, [](auto& s) -> auto& { return s.pipeline.relocaliser.confirm_frames; }));
   t.push_back(bound<double>("RelocaliseMinOverlap", "",
-                            "a candidate is kept only with this fraction of the image's points near mapped surfaces",
-                            closed(0.0, 1.0), same(0.85), kLive, kAll,
+                            "a candidate is kept only with this fraction of the image's points on mapped surfaces "
+                            "(the rest may be ground the map never saw)",
+                            closed(0.0, 1.0), same(0.4), kLive, kAll,
                             [](auto& s) -> auto& { return s.pipeline.relocaliser.min_overlap; }));
+  t.push_back(bound<double>("RelocaliseMaxContradiction", "",
+                            "a candidate is kept only with at most this fraction of the image's points where the map "
+                            "saw free space, or seen through a mapped surface",
+                            closed(0.0, 1.0), same(0.05), kLive, kAll,
+                            [](auto& s) -> auto& { return s.pipeline.relocaliser.max_contradiction; }));
   for (int axis = 0; axis < 3; ++axis) {
     t.push_back(bound<double>(kInitialCameraParameters[axis], "",
                               std::string("dense grid: first camera's place along ") + char('x' + axis) +

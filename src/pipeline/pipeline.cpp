@@ -292,6 +292,7 @@ bool SdfPipeline::search(const DepthImage& filtered, const PinholeCamera& camera
   r.candidates_tried = step.candidates_tried;
   r.frames_spent = relocaliser_->framesSpent();
   r.confirmed = step.confirmed;
+  r.places_fitting = step.places_fitting;
   r.message = step.message;
   r.search_ms = millisecondsSince(start);
   if (step.outcome == Relocaliser::Outcome::kAccepted) {
@@ -310,7 +311,8 @@ bool SdfPipeline::search(const DepthImage& filtered, const PinholeCamera& camera
     s << "; " << step.message;
   }
   if (!tracking_failure.empty()) s << " (from the held pose: " << tracking_failure << ")";
-  report->track.status = TrackStatus::kRelocalising;
+  report->track.status =
+      step.outcome == Relocaliser::Outcome::kAmbiguous ? TrackStatus::kAmbiguous : TrackStatus::kRelocalising;
   report->track.T_W_C = T_W_C_;
   report->track.pose_estimated = false;
   report->track.message = s.str();

@@ -122,7 +122,8 @@ void NodeDiagnostics::tracking(diagnostic_updater::DiagnosticStatusWrapper& stat
     // says): what the view leaves open, its odometry gives.
     stat.summaryf(DiagnosticStatus::OK, "tracking: %d of 6 directions from the view, the others from the odometry",
                   last_.constrained_rank);
-  } else if (last_.status == sdf_tracker::TrackingStatus::RELOCALISING) {
+  } else if (last_.status == sdf_tracker::TrackingStatus::RELOCALISING ||
+             last_.status == sdf_tracker::TrackingStatus::AMBIGUOUS) {
     stat.summary(DiagnosticStatus::WARN, "searching the map for the camera: " + last_.status_text);
   } else if (last_.status != sdf_tracker::TrackingStatus::OK) {
     stat.summary(DiagnosticStatus::WARN, last_.status_text);

@@ -356,7 +356,8 @@ void TrackerServer::process(const Frame& frame) {
   static_assert(int(Status::kOk) == Msg::OK && int(Status::kNotConverged) == Msg::NOT_CONVERGED &&
                 int(Status::kTooFewPoints) == Msg::TOO_FEW_POINTS && int(Status::kDegenerate) == Msg::DEGENERATE &&
                 int(Status::kDiverged) == Msg::DIVERGED && int(Status::kBadInput) == Msg::BAD_INPUT &&
-                int(Status::kLowOverlap) == Msg::LOW_OVERLAP && int(Status::kRelocalising) == Msg::RELOCALISING);
+                int(Status::kLowOverlap) == Msg::LOW_OVERLAP && int(Status::kRelocalising) == Msg::RELOCALISING &&
+                int(Status::kAmbiguous) == Msg::AMBIGUOUS);
   status.status = static_cast<uint8_t>(t.status);
   status.status_text = statusText(t);
   status.iterations_per_level = t.iterations_per_level;

@@ -243,6 +243,20 @@ Scene Scene::house(HouseWalls walls) {
   return scene;
 }
 
+Scene Scene::twoIdenticalRooms() {
+  Scene scene = indoorRoom();
+  scene.add(indoorRoom(), Eigen::Isometry3d(Eigen::Translation3d(6.0, 0.0, 0.0)));
+  return scene;
+}
+
+void Scene::add(const Scene& other, const Eigen::Isometry3d& T_W_other) {
+  for (Primitive p : other.primitives_) {
+    p.centre_W = T_W_other * p.centre_W;
+    p.R_W_P = T_W_other.linear() * p.R_W_P;
+    primitives_.push_back(p);
+  }
+}
+
 Scene Scene::forMotion(Motion motion, HouseWalls walls) {
   switch (motion) {
     case Motion::kPlanar: return singleWall();

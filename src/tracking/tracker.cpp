@@ -282,6 +282,7 @@ const char* toString(TrackStatus status) {
     case TrackStatus::kBadInput: return "bad_input";
     case TrackStatus::kLowOverlap: return "low_overlap";
     case TrackStatus::kRelocalising: return "relocalising";
+    case TrackStatus::kAmbiguous: return "ambiguous";
   }
   return "unknown";
 }

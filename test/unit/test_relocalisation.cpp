@@ -1,5 +1,5 @@
 // Finding the camera again: the place descriptor, the place memory, the wide-basin field, and the
-// relocaliser's candidates and their confirmation (whole runs: test/sequences/test_relocalisation_runs.cpp).
+// verification of a pose by what the map has observed, the relocaliser's candidates and their confirmation (whole runs: test/sequences/test_relocalisation_runs.cpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,6 +10,8 @@
 #include "sdf_tracker/places/place_memory.h"
 #include "sdf_tracker/relocalisation/coarse_field.h"
 #include "sdf_tracker/relocalisation/relocaliser.h"
+#include "sdf_tracker/relocalisation/view_agreement.h"
+#include "sdf_tracker/fusion/integrator.h"
 #include "sdf_tracker/sim/synthetic.h"
 #include "sdf_tracker/util/se3.h"
 #include "test_helpers.h"
@@ -150,6 +152,71 @@ TEST(CoarseField, HoldsTheDistanceToTheNearestSurfaceUpToItsReach) {
   const TsdfVolume bounded = buildCoarseField(planeVolume(), 0.01, 0.3, 20000);
   EXPECT_GT(bounded.voxelSize(), 0.01);
   EXPECT_LE(bounded.voxelCount(), 30000u);
+}
+
+/// A map on the default preset's lattice with `depth` fused from T_W_C.
+std::unique_ptr<TsdfMap> mapOf(const DepthImage& depth, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C) {
+  const PipelineConfig config = preset("default").pipeline;
+  std::unique_ptr<TsdfMap> map = makeMap(config.volume);
+  Integrator(config.integrator).integrate(depth, camera, T_W_C, map.get());
+  return map;
+}
+
+TEST(ViewAgreement, ARightPoseWithHalfTheViewNewContradictsNothingAndAWrongOneDoes) {
+  const PinholeCamera camera = test::testCamera();
+  const Eigen::Isometry3d truth = deskPose(0.0);
+  const DepthImage view = test::renderRoom(truth);
+  // The map saw only the left half of this view.
+  const std::unique_ptr<TsdfMap> map = mapOf(test::withoutRightHalf(view), camera, truth);
+  const ViewAgreement right = measureViewAgreement(view, camera, *map, truth, 4);
+  EXPECT_GT(right.points, 4000);
+  EXPECT_NEAR(right.mappedShare(), 0.5, 0.1) << "the right half is new ground";
+  EXPECT_GT(right.tightShare(), 0.95);
+  EXPECT_LT(right.contradictionShare(), 0.002);
+  // The same view 10 cm and 3 degrees off: its points leave the surfaces, into the free space
+  // the map saw in front of them.
+  const ViewAgreement wrong = measureViewAgreement(view, camera, *map, test::perturbed(truth, 0.1, 0.05), 4);
+  EXPECT_GT(wrong.contradictionShare(), 0.1);
+  EXPECT_THROW(measureViewAgreement(view, camera, *map, truth, 0), std::invalid_argument);
+}
+
+/// From the origin along +z: a wall 2.5 m ahead and, with `panel`, a panel 1 m ahead in front of
+/// its left half.
+DepthImage wallAndPanel(bool panel, const Eigen::Isometry3d& T_W_C) {
+  synthetic::Scene scene;
+  synthetic::Primitive wall;
+  wall.centre_W = Eigen::Vector3d(0.0, 0.0, 2.6);
+  wall.half_extent_m = Eigen::Vector3d(4.0, 4.0, 0.1);
+  scene.add(wall);
+  if (panel) {
+    synthetic::Primitive near;
+    near.centre_W = Eigen::Vector3d(-1.0, 0.0, 1.05);
+    near.half_extent_m = Eigen::Vector3d(1.0, 2.0, 0.05);
+    scene.add(near);
+  }
+  synthetic::NoiseModel no_noise;
+  no_noise.enabled = false;
+  return scene.render(test::testCamera(), T_W_C, no_noise, 0);
+}
+
+TEST(ViewAgreement, APoseThatFitsOneSurfaceButLooksThroughOrPastAnotherIsContradicted) {
+  const PinholeCamera camera = test::testCamera();
+  const Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();
+  const std::unique_ptr<TsdfMap> map = mapOf(wallAndPanel(true, origin), camera, origin);
+  const ViewAgreement same = measureViewAgreement(wallAndPanel(true, origin), camera, *map, origin, 4);
+  EXPECT_GT(same.mappedShare(), 0.95);
+  EXPECT_LT(same.contradictionShare(), 0.02) << "rays grazing the panel's edge, at most";
+  // A view of the wall alone placed here: the wall's right half fits, the left half is seen
+  // through the panel.
+  const ViewAgreement through = measureViewAgreement(wallAndPanel(false, origin), camera, *map, origin, 4);
+  EXPECT_GT(through.contradictionShare(), 0.3);
+  // The same view from 15 cm further on, placed here: the wall's points lie in the free space the
+  // map saw in front of it.
+  Eigen::Isometry3d ahead = Eigen::Isometry3d::Identity();
+  ahead.translation() = Eigen::Vector3d(0.0, 0.0, 0.15);
+  const ViewAgreement short_of = measureViewAgreement(wallAndPanel(false, ahead), camera, *map, origin, 4);
+  EXPECT_GT(short_of.in_free_space, short_of.points / 4);
+  EXPECT_GT(short_of.contradictionShare(), 0.6);
 }
 
 /// The room fused along the desk path's first `seconds` (at 6 Hz), on the default preset's

@@ -93,6 +93,7 @@ struct RelocalisationReport {
   int candidates_tried = 0;  ///< on this frame
   int frames_spent = 0;      ///< by the search so far, this frame included
   int confirmed = 0;         ///< frames the kept candidate has tracked in a row
+  int places_fitting = 0;    ///< distinct places that fit this frame (outcome kAmbiguous: two or more)
   double search_ms = 0.0;
   std::string message;  ///< why nothing was kept, or why no search could run
 };

@@ -62,7 +62,13 @@ class Scene {
   /// The scene a path is made for (`walls`: the house's, for the walk).
   static Scene forMotion(Motion motion, HouseWalls walls = HouseWalls::kFurnished);
 
+  /// Two copies of the indoor room side by side, 6 m apart along x, each closed: standing in
+  /// either, nothing tells which it is.
+  static Scene twoIdenticalRooms();
+
   void add(const Primitive& p) { primitives_.push_back(p); }
+  /// Adds every primitive of `other`, moved by T_W_other.
+  void add(const Scene& other, const Eigen::Isometry3d& T_W_other);
 
   /// Distance along a unit ray to the first surface and that surface's normal; false if none.
   bool intersect(const Eigen::Vector3d& origin_W, const Eigen::Vector3d& dir_W, double* t,

@@ -74,6 +74,8 @@ enum class TrackStatus {
   kLowOverlap,    ///< at the estimate, too few of the image's points lie near mapped surfaces.
   kRelocalising,  ///< set by the pipeline, never the tracker: the camera's pose is not known and
                   ///< the map is being searched for it (nothing is fused meanwhile).
+  kAmbiguous,     ///< set by the pipeline: as kRelocalising, and two or more places of the map fit
+                  ///< the view alike, so none is accepted until it tells them apart.
 };
 
 const char* toString(TrackStatus status);
