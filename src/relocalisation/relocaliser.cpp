@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "sdf_tracker/relocalisation/coarse_field.h"
+#include "sdf_tracker/util/se3.h"
 #include "sdf_tracker/util/validation.h"
 
 namespace sdf_tracker {
@@ -109,7 +110,7 @@ constexpr double kDistinctPlace_rad = 0.15;
 
 bool samePlace(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   const Eigen::Isometry3d d = a.inverse() * b;
-  return d.translation().norm() <= kDistinctPlace_m && Eigen::AngleAxisd(d.rotation()).angle() <= kDistinctPlace_rad;
+  return d.translation().norm() <= kDistinctPlace_m && rotationAngle(d) <= kDistinctPlace_rad;
 }
 
 std::string describe(const TrackResult& track, const ViewAgreement& agreement) {
@@ -210,7 +211,6 @@ Relocaliser::Step Relocaliser::step(const DepthImage& depth, const PinholeCamera
     // confirmed until the view tells them apart.
     result.outcome = Outcome::kAmbiguous;
     result.track = fitting.front().track;
-    result.agreement = fitting.front().agreement;
     std::ostringstream s;
     s << fitting.size() << " places fit the view alike (" << result.candidates_tried
       << " new candidates tried); nothing is accepted until the view tells them apart";
@@ -224,14 +224,12 @@ Relocaliser::Step Relocaliser::step(const DepthImage& depth, const PinholeCamera
     if (closest) s << "; the closest: " << describe(closest->track, closest->agreement);
     s << ")";
     result.message = s.str();
-    if (closest) result.agreement = closest->agreement;
     return result;
   }
   Fit& fit = fitting.front();
   result.confirmed = hypotheses_.front().confirmed = fit.confirmed + 1;
   result.T_W_C = fit.track.T_W_C;
   result.track = std::move(fit.track);
-  result.agreement = fit.agreement;
   result.outcome = result.confirmed >= config_.confirm_frames ? Outcome::kAccepted : Outcome::kConfirming;
   if (result.outcome == Outcome::kAccepted) {
     searching_ = false;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 
 namespace sdf_tracker {
@@ -41,6 +42,7 @@ ViewAgreement measureViewAgreement(const DepthImage& depth, const PinholeCamera&
   if (furthest_m <= 0.0f) return sum;
 
   const Eigen::Isometry3f T = T_W_C.cast<float>();
+  const Eigen::Vector3f centre_W = T.translation();
   const std::unique_ptr<FieldSampler> field = map.sampler(camera.viewBox(T, furthest_m));
   const Eigen::AlignedBox3f holdable = map.holdableRegion();
   const float dmax = map.positiveTruncation();
@@ -56,8 +58,8 @@ ViewAgreement measureViewAgreement(const DepthImage& depth, const PinholeCamera&
     const int u = (cell % columns) * stride, v = (cell / columns) * stride;
     const float z = depth.at(u, v);
     if (!DepthImage::isMeasurement(z)) continue;
-    const Eigen::Vector3f ray_C = camera.backProject(u, v, 1.0f);  // per metre of depth
-    const Eigen::Vector3f p_W = T * (z * ray_C);
+    const Eigen::Vector3f ray_W = T.linear() * camera.backProject(u, v, 1.0f);  // per metre of depth
+    const Eigen::Vector3f p_W = centre_W + z * ray_W;
     if (!holdable.contains(p_W)) continue;
     ++sum.points;
     FieldSample s;
@@ -74,10 +76,10 @@ ViewAgreement measureViewAgreement(const DepthImage& depth, const PinholeCamera&
     // Does its ray pass through a mapped surface on the way (a point on a mapped surface too: a
     // wrong place can fit a wall seen through another one)? Marched up to where a right pose's own
     // surface band begins.
-    const float ray_length = ray_C.norm();
+    const float ray_length = ray_W.norm();
     const float depth_step = step / ray_length;
     for (float t = kRayStart_m / ray_length; t < z - dmax; t += depth_step) {
-      if (field->sample(T * (t * ray_C), &s) && s.distance_m < inside) {
+      if (field->sample(centre_W + t * ray_W, &s) && s.distance_m < inside) {
         ++sum.seen_through;
         break;
       }

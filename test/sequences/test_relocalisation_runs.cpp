@@ -163,7 +163,7 @@ TEST(PipelineRelocalisation, InTwoIdenticalRoomsNothingIsAcceptedAndTheStatusSay
       EXPECT_NE(report.track.message.find("2 places fit"), std::string::npos) << report.track.message;
     }
   }
-  EXPECT_GE(ambiguous, 15) << "of 22 frames, the status says why nothing is accepted";
+  EXPECT_GE(ambiguous, 15) << "of 23 frames, the status says why nothing is accepted";
 }
 
 }  // namespace

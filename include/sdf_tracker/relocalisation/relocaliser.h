@@ -76,7 +76,6 @@ class Relocaliser {
     Outcome outcome = Outcome::kNotFound;
     Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();  ///< the candidate's pose (kConfirming, kAccepted)
     TrackResult track;                                        ///< the frame tracked from the candidate
-    ViewAgreement agreement;  ///< of the frame at the candidate's pose (or at the closest miss's)
     int candidates_tried = 0;                                 ///< this frame
     int confirmed = 0;
     int places_fitting = 0;  ///< distinct places that fit this frame (kAmbiguous: two or more)
