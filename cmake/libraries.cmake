@@ -31,7 +31,7 @@ sdf_tracker_part(pipeline SOURCES parameters pipeline DEPENDS fusion tracking su
 sdf_tracker_part(io SOURCES depth_png files map_file mesh_file sdfmap_file trajectory_file tum_sequence vti_file
   DEPENDS camera map surface places LINK ${OpenCV_LIBS})
 target_include_directories(sdf_tracker_io SYSTEM PRIVATE ${OpenCV_INCLUDE_DIRS})
-sdf_tracker_part(sim SOURCES synthetic wheel_odometry DEPENDS io)
+sdf_tracker_part(sim SOURCES relocalisation_cases synthetic wheel_odometry DEPENDS io)
 sdf_tracker_part(eval SOURCES evaluation DEPENDS io)
 
 # Depth cameras' own formats, without ROS or the vendors' libraries: the Kinect v1's disparity

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <iomanip>
 #include <limits>
 #include <sstream>
@@ -102,23 +103,82 @@ Eigen::Isometry3d lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& targ
 
 constexpr double kGravity_m_s2 = 9.81;
 
-Scene Scene::indoorRoom() {
-  // World: y points down (as the first camera's image), floor at y = 1.3 m.
+namespace {
+
+// The indoor room's parts. World: y points down (as the first camera's image), floor at y = 1.3 m.
+
+/// A room seen from within, its floor at y = 1.3 m.
+Primitive roomShell(const Eigen::Vector3d& centre, const Eigen::Vector3d& half) {
+  return box(centre, half, Eigen::Matrix3d::Identity(), true);
+}
+
+/// The desk (its top centred at x = 0, z = 1.5) and what stands on it.
+Scene desk() {
   Scene scene;
-  scene.add(box({0.0, -0.1, 1.0}, {2.5, 1.4, 2.5}, Eigen::Matrix3d::Identity(), true));  // room
-  scene.add(box({0.0, 0.5, 1.5}, {0.8, 0.02, 0.45}));                                   // desk top
+  scene.add(box({0.0, 0.5, 1.5}, {0.8, 0.02, 0.45}));  // desk top
   for (double sx : {-0.75, 0.75}) {
     for (double z : {1.1, 1.9}) scene.add(box({sx, 0.91, z}, {0.03, 0.39, 0.03}));  // desk legs
   }
-  scene.add(sphere({0.35, 0.36, 1.4}, 0.12));                                         // ball on the desk
-  scene.add(box({-0.35, 0.36, 1.5}, {0.12, 0.12, 0.1}, rotation(0.0, 0.5, 0.0)));    // turned box on the desk
-  scene.add(box({0.0, 0.4, 1.85}, {0.25, 0.08, 0.04}, rotation(0.3, 0.0, 0.0)));     // tilted book stand
-  scene.add(box({1.6, 0.3, 3.1}, {0.5, 1.0, 0.35}));                                  // cabinet
-  scene.add(box({-1.8, 0.0, 2.2}, {0.4, 0.3, 0.02}, rotation(0.35, 0.8, 0.6)));      // slanted panel
-  scene.add(box({-1.0, 1.1, 0.8}, {0.25, 0.2, 0.25}, rotation(0.0, 0.35, 0.0)));     // crate on the floor
-  scene.add(sphere({1.0, 1.0, 2.6}, 0.3));                                            // ball on the floor
+  scene.add(sphere({0.35, 0.36, 1.4}, 0.12));                                       // ball on the desk
+  scene.add(box({-0.35, 0.36, 1.5}, {0.12, 0.12, 0.1}, rotation(0.0, 0.5, 0.0)));  // turned box on the desk
+  scene.add(box({0.0, 0.4, 1.85}, {0.25, 0.08, 0.04}, rotation(0.3, 0.0, 0.0)));   // tilted book stand
   return scene;
 }
+
+/// The furniture around the desk.
+Scene furniture() {
+  Scene scene;
+  scene.add(box({1.6, 0.3, 3.1}, {0.5, 1.0, 0.35}));                              // cabinet
+  scene.add(box({-1.8, 0.0, 2.2}, {0.4, 0.3, 0.02}, rotation(0.35, 0.8, 0.6)));  // slanted panel
+  scene.add(box({-1.0, 1.1, 0.8}, {0.25, 0.2, 0.25}, rotation(0.0, 0.35, 0.0)));  // crate on the floor
+  scene.add(sphere({1.0, 1.0, 2.6}, 0.3));                                        // ball on the floor
+  return scene;
+}
+
+}  // namespace
+
+Scene Scene::indoorRoom() {
+  Scene scene;
+  scene.add(roomShell({0.0, -0.1, 1.0}, {2.5, 1.4, 2.5}));
+  scene.add(desk(), Eigen::Isometry3d::Identity());
+  scene.add(furniture(), Eigen::Isometry3d::Identity());
+  return scene;
+}
+
+Scene Scene::twoIdenticalRooms() {
+  Scene scene = indoorRoom();
+  scene.add(indoorRoom(), secondRoom());
+  return scene;
+}
+
+Eigen::Isometry3d Scene::secondRoom() { return Eigen::Isometry3d(Eigen::Translation3d(6.0, 0.0, 0.0)); }
+
+Scene Scene::symmetricRoom() {
+  Scene scene;
+  scene.add(roomShell({0.0, -0.1, 1.5}, {2.5, 1.4, 2.5}));
+  Scene contents = desk();
+  contents.add(furniture(), Eigen::Isometry3d::Identity());
+  scene.add(contents, Eigen::Isometry3d::Identity());
+  scene.add(contents, halfTurnAboutTheDesk());
+  return scene;
+}
+
+Eigen::Isometry3d Scene::halfTurnAboutTheDesk() {
+  const Eigen::Vector3d axis_point(0.0, 0.0, 1.5);
+  return Eigen::Translation3d(axis_point) * Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()) *
+         Eigen::Translation3d(-axis_point);
+}
+
+Scene Scene::twoIdenticalDesks() {
+  Scene scene;
+  scene.add(roomShell({1.25, -0.1, 1.5}, {3.25, 1.4, 2.5}));
+  scene.add(desk(), Eigen::Isometry3d::Identity());
+  scene.add(desk(), secondDesk());
+  scene.add(furniture(), Eigen::Isometry3d::Identity());
+  return scene;
+}
+
+Eigen::Isometry3d Scene::secondDesk() { return Eigen::Isometry3d(Eigen::Translation3d(2.5, 0.0, 0.0)); }
 
 namespace {
 
@@ -240,12 +300,6 @@ Scene Scene::house(HouseWalls walls) {
   scene.add(onFloor(11.0, 3.0, 0.4, 1.4, 0.4));
   scene.add(sphere({10.0, kFloorY - 0.25, 5.0}, 0.25));
   if (walls == HouseWalls::kFurnished) addPicturesAndShelves(&scene, house_walls);
-  return scene;
-}
-
-Scene Scene::twoIdenticalRooms() {
-  Scene scene = indoorRoom();
-  scene.add(indoorRoom(), Eigen::Isometry3d(Eigen::Translation3d(6.0, 0.0, 0.0)));
   return scene;
 }
 
@@ -492,34 +546,51 @@ Eigen::Isometry3d cameraPose(Motion motion, double t_s, double duration_s) {
   return lookAt(eye, target, 0.12 * std::sin(0.6 * s));
 }
 
+void writeTumFolder(const std::string& directory, const std::string& comment,
+                    const std::vector<io::StampedPose>& poses, const std::vector<io::StampedPose>& ground_truth,
+                    const std::function<DepthImage(size_t)>& render, const PinholeCamera& camera,
+                    double depth_factor) {
+  io::makeDirectories(directory + "/depth");
+  std::ostringstream depth_list, intrinsics;
+  depth_list << "# " << comment << "\n# timestamp filename\n" << std::fixed << std::setprecision(6);
+  for (size_t i = 0; i < poses.size(); ++i) {
+    char name[64];
+    std::snprintf(name, sizeof(name), "depth/%.6f.png", poses[i].timestamp_s);
+    io::writeDepthPng(directory + "/" + name, render(i), depth_factor);
+    depth_list << poses[i].timestamp_s << ' ' << name << '\n';
+  }
+  io::writeTrajectory(directory + "/groundtruth.txt", ground_truth);
+  // The distortion columns are written even when zero: the reader would otherwise take TUM's
+  // published distortion for TUM's intrinsics.
+  const LensDistortion& d = camera.distortion;
+  intrinsics << "# " << TumSequence::kIntrinsicsColumns << "\n"
+             << camera.fx << ' ' << camera.fy << ' ' << camera.cx << ' ' << camera.cy << ' ' << camera.width << ' '
+             << camera.height << ' ' << depth_factor << ' ' << d.k1 << ' ' << d.k2 << ' ' << d.p1 << ' ' << d.p2
+             << ' ' << d.k3 << '\n';
+  io::writeTextFile(directory + "/intrinsics.txt", intrinsics.str());
+  io::writeTextFile(directory + "/depth.txt", depth_list.str());
+}
+
 void writeSequence(const std::string& directory, const SequenceSpec& spec) {
   if (spec.frames <= 0 || !(spec.rate_hz > 0.0)) {
     throw std::invalid_argument("a sequence needs frames > 0 and rate_hz > 0 (got " + std::to_string(spec.frames) +
                                 ", " + std::to_string(spec.rate_hz) + ")");
   }
-  io::makeDirectories(directory + "/depth");
   const Scene scene = Scene::forMotion(spec.motion, spec.house_walls);
   const double duration = spec.frames / spec.rate_hz;
-  std::ostringstream depth_list, ground_truth, intrinsics;
-  depth_list << "# synthetic depth (sdf_tracker), motion " << toString(spec.motion) << ", noise "
-             << (spec.noise.enabled ? "on" : "off") << ", seed " << spec.seed
-             << (spec.house_walls == HouseWalls::kBare ? ", bare walls" : "")
-             << "\n# timestamp filename\n";
-  ground_truth << "# exact ground truth, camera to world\n# timestamp tx ty tz qx qy qz qw\n";
   std::vector<io::StampedPose> poses;
   for (int i = 0; i < spec.frames; ++i) {
     const double t = i / spec.rate_hz;
-    const Eigen::Isometry3d T_W_C = cameraPose(spec.motion, t, duration);
-    char name[64];
-    std::snprintf(name, sizeof(name), "depth/%.6f.png", t);
-    io::writeDepthPng(directory + "/" + name, scene.render(spec.camera, T_W_C, spec.noise, spec.seed * 100003u + i),
-                      spec.depth_factor);
-    depth_list << std::fixed;
-    depth_list.precision(6);
-    depth_list << t << ' ' << name << '\n';
-    poses.push_back({t, T_W_C});
+    poses.push_back({t, cameraPose(spec.motion, t, duration)});
   }
-  io::writeTrajectory(directory + "/groundtruth.txt", poses);
+  std::ostringstream comment;
+  comment << "synthetic depth (sdf_tracker), motion " << toString(spec.motion) << ", noise "
+          << (spec.noise.enabled ? "on" : "off") << ", seed " << spec.seed
+          << (spec.house_walls == HouseWalls::kBare ? ", bare walls" : "");
+  writeTumFolder(
+      directory, comment.str(), poses, poses,
+      [&](size_t i) { return scene.render(spec.camera, poses[i].T_W_C, spec.noise, spec.seed * 100003u + i); },
+      spec.camera, spec.depth_factor);
   if (spec.odometry) io::writeTrajectory(directory + "/odometry.txt", wheelOdometry(poses, *spec.odometry));
   // What a resting accelerometer fixed to the depth camera reads (gravity's reaction, up: -y in
   // this world), at 100 Hz from half a second before the first frame, in the camera's frame.
@@ -533,15 +604,13 @@ void writeSequence(const std::string& directory, const SequenceSpec& spec) {
                   << a_C.z() << '\n';
   }
   io::writeTextFile(directory + "/accelerometer.txt", accelerometer.str());
-  // The distortion columns are written even when zero: the reader would otherwise take TUM's
-  // published distortion for TUM's intrinsics.
-  const LensDistortion& d = spec.camera.distortion;
-  intrinsics << "# " << TumSequence::kIntrinsicsColumns << "\n"
-             << spec.camera.fx << ' ' << spec.camera.fy << ' ' << spec.camera.cx << ' ' << spec.camera.cy << ' '
-             << spec.camera.width << ' ' << spec.camera.height << ' ' << spec.depth_factor << ' ' << d.k1 << ' '
-             << d.k2 << ' ' << d.p1 << ' ' << d.p2 << ' ' << d.k3 << '\n';
-  io::writeTextFile(directory + "/intrinsics.txt", intrinsics.str());
-  io::writeTextFile(directory + "/depth.txt", depth_list.str());
+}
+
+DepthImage withoutRightHalf(DepthImage depth) {
+  for (int v = 0; v < depth.height(); ++v) {
+    for (int u = depth.width() / 2; u < depth.width(); ++u) depth.at(u, v) = 0.0f;
+  }
+  return depth;
 }
 
 }  // namespace sdf_tracker::synthetic

@@ -4,6 +4,7 @@
 
 #include "sdf_tracker/cli/command_line.h"
 #include "sdf_tracker/pipeline/parameters.h"
+#include "sdf_tracker/sim/relocalisation_cases.h"
 #include "sdf_tracker/sim/synthetic.h"
 
 namespace {
@@ -29,12 +30,18 @@ Renders an analytic indoor scene along a scripted camera path, in TUM layout
   --odometry         also write odometry.txt: the camera's poses as a robot's wheel odometry would
                      report them (each metre 2 % too long, the heading drifting 1 degree per metre,
                      noise), for sdf_tracker_offline --odometry
+  --relocalisation-case NAME   instead of one sequence, a second session in a saved map:
+                     DIR/mapping (map it at its true poses: sdf_tracker_offline --fuse-ground-truth
+                     --save-map) and DIR/session (run it in that map: --load-volume), at 15 Hz;
+                     NAME: half-new | two-rooms | symmetric-room | two-desks (DIR/case.txt says
+                     what each is). --size, --seed and the noise options apply
 )";
 
 int run(int argc, char** argv) {
   using namespace sdf_tracker;
   const tools::CommandLine args(argc, argv,
-                                {"output", "motion", "frames", "seed", "size", "disparity-subpixels", "noise-scale"},
+                                {"output", "motion", "frames", "seed", "size", "disparity-subpixels", "noise-scale",
+                                 "relocalisation-case"},
                                 {"no-noise", "bare-walls", "odometry", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -66,6 +73,20 @@ int run(int argc, char** argv) {
   spec.noise.disparity_subpixels = args.getInt("disparity-subpixels", spec.noise.disparity_subpixels);
   spec.noise.axial_noise_scale = args.getDouble("noise-scale", spec.noise.axial_noise_scale);
   const std::string output = args.require("output");
+  if (args.has("relocalisation-case")) {
+    for (const char* option : {"motion", "frames", "bare-walls", "odometry"}) {
+      if (args.has(option)) {
+        throw std::invalid_argument(std::string("--") + option + ": a relocalisation case has its own paths (got --relocalisation-case " +
+                                    args.get("relocalisation-case") + ")");
+      }
+    }
+    const synthetic::RelocalisationCase c = synthetic::relocalisationCase(args.get("relocalisation-case"));
+    synthetic::writeRelocalisationCase(output, c, spec.camera, spec.noise, spec.seed);
+    std::cout << "wrote relocalisation case " << c.name << " (" << c.mapping.size() << " frames to map, "
+              << c.session.size() << " in the second session, noise " << (spec.noise.enabled ? "on" : "off")
+              << ") to " << output << "\n";
+    return 0;
+  }
   synthetic::writeSequence(output, spec);
   std::cout << "wrote " << spec.frames << " frames (" << synthetic::toString(spec.motion) << ", noise "
             << (spec.noise.enabled ? "on" : "off") << ") to " << output << "\n";

@@ -11,7 +11,9 @@
 #include <std_srvs/Trigger.h>
 
 #include "node_test.h"
+#include "sdf_tracker/io/map_file.h"
 #include "sdf_tracker/ros/pose_broadcaster.h"
+#include "sdf_tracker/sim/relocalisation_cases.h"
 
 namespace node_test {
 namespace {
@@ -167,6 +169,53 @@ TEST_F(NodeRelocalisationTest, APoseOnInitialposeIsVerifiedAndTheCameraTrackedFr
   }
   std::cout << "[ figures  ] with the same pose sent before every frame: " << searching << " frames searched\n";
   expectTrackedAtTheTruth(last);
+}
+
+TEST_F(NodeRelocalisationTest, ASecondSessionWhoseFirstViewIsHalfNewIsFoundWithinItsConfirmation) {
+  // Issue 42: the first session saw only the left half of its views (sim's "half-new" case), mapped
+  // beside the node as a user's earlier session was and saved; the node loads it, and the second
+  // session's first view is half ground that map never saw.
+  const st::synthetic::RelocalisationCase half_new = st::synthetic::relocalisationCase("half-new");
+  st::synthetic::NoiseModel exact;
+  exact.enabled = false;
+  const std::string path = "/tmp/sdf_tracker_node_test_half_new.sdfmap";
+  const st::PipelineConfig config = st::preset("default").pipeline;
+  {
+    st::SdfPipeline first(config);
+    for (size_t i = 0; i < half_new.mapping.size(); ++i) {
+      first.processFrameAtPose(half_new.mappingView(i, kQvga, exact, 0), kQvga, half_new.mapping[i].T_W_C,
+                               half_new.mapping[i].timestamp_s);
+    }
+    st::io::writeMap(path, first.map(), &first.places());
+  }
+  sdf_tracker::SavePath load;
+  load.request.path = path;
+  ASSERT_TRUE(callService("sdf_tracker/load_volume", load));
+  ASSERT_TRUE(load.response.success) << load.response.message;
+
+  const double first_stamp_s = 1000.0;
+  sdf_tracker::TrackingStatus status;
+  size_t frame = 0;
+  for (; frame < half_new.session.size(); ++frame) {
+    std_msgs::Header header;
+    header.stamp = ros::Time(first_stamp_s + frame / 15.0);
+    header.frame_id = "camera_depth_optical_frame";
+    status = publishAndWait(sdf_tracker_ros::toImageMsg(half_new.sessionView(frame, kQvga, exact, 0), header), kQvga);
+    if (status.status == sdf_tracker::TrackingStatus::OK) break;
+    EXPECT_EQ(status.status, sdf_tracker::TrackingStatus::RELOCALISING) << status.status_text;
+    EXPECT_FALSE(status.fused) << status.status_text;
+  }
+  std::cout << "[ figures  ] half-new second session: " << frame << " frames searched, then " << status.status_text
+            << "\n";
+  ASSERT_EQ(status.status, sdf_tracker::TrackingStatus::OK) << "never found";
+  EXPECT_LE(frame, static_cast<size_t>(config.relocaliser.confirm_frames)) << "found late";
+  const std::optional<Eigen::Isometry3d> pose = poseAt(status.header.stamp.toSec());
+  ASSERT_TRUE(pose) << "no ~pose for the frame that was tracked";
+  const Eigen::Isometry3d truth = sdf_tracker_ros::mapFromOpticalWorld() * half_new.session[frame].T_W_C;
+  const double error_m = (pose->translation() - truth.translation()).norm();
+  std::cout << "[ figures  ] found " << error_m * 1000 << " mm from the truth\n";
+  EXPECT_LT(error_m, kMaxPositionError_m);
+  expectNoPoseBetween(first_stamp_s, first_stamp_s + (frame - 0.5) / 15.0);
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <iostream>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -11,6 +13,7 @@
 #include "sdf_tracker/pipeline/parameters.h"
 #include "sdf_tracker/pipeline/pipeline.h"
 #include "sdf_tracker/relocalisation/view_agreement.h"
+#include "sdf_tracker/sim/relocalisation_cases.h"
 #include "sdf_tracker/sim/synthetic.h"
 #include "test_helpers.h"
 
@@ -119,51 +122,88 @@ std::unique_ptr<SdfPipeline> secondSession(const SdfPipeline& first, const std::
   return pipeline;
 }
 
-TEST(PipelineRelocalisation, ASecondSessionWhoseFirstViewIsHalfNewIsFoundAtOnce) {
-  // The first session saw only the left half of each view (the right half: ground it never saw).
+/// A relocalisation case's first session fused at its true poses (the map is in the world's
+/// frame), and its second session run in that map; what the second session did.
+struct CaseRun {
+  int frames = 0;
+  int frames_until_found = -1;
+  int ambiguous_frames = 0;
+  int fused_frames = 0;
+  double worst_error_after_m = 0.0;  ///< of the frames from the one found on
+  ViewAgreement first_view_at_truth;
+};
+CaseRun runCase(const synthetic::RelocalisationCase& c) {
+  synthetic::NoiseModel no_noise;
+  no_noise.enabled = false;
+  const PinholeCamera camera = test::testCamera();
   SdfPipeline first(preset("default").pipeline);
-  for (double t : loopTimes(0.0, 2.0)) first.processFrameAtPose(test::withoutRightHalf(loopView(t)), test::testCamera(), loopPose(t), t);
-  const Eigen::Isometry3d T_map_world = Eigen::Isometry3d::Identity();  // the map is in the given poses' frame
-  std::unique_ptr<SdfPipeline> session = secondSession(first, "half_new");
-  const double t0 = 2.0;
-  const ViewAgreement at_truth =
-      measureViewAgreement(loopView(t0), test::testCamera(), session->map(), T_map_world * loopPose(t0), 4);
-  ASSERT_LT(at_truth.mappedShare(), 0.6) << "the case is a view with much of it new";
-  EXPECT_LT(at_truth.contradictionShare(), 0.005);
-  const Recovery r = recover(session.get(), loopTimes(t0, t0 + 1.0), T_map_world);
-  ASSERT_GE(r.frames_until_found, 0) << "never found";
-  EXPECT_LE(r.frames_until_found, session->config().relocaliser.confirm_frames);
-  EXPECT_LT(r.worst_fused_error_m, 0.02);
-  EXPECT_LT(r.worst_error_after_m, 0.02);
+  for (size_t i = 0; i < c.mapping.size(); ++i) {
+    first.processFrameAtPose(c.mappingView(i, camera, no_noise, 0), camera, c.mapping[i].T_W_C, c.mapping[i].timestamp_s);
+  }
+  std::unique_ptr<SdfPipeline> session = secondSession(first, c.name);
+  CaseRun run;
+  run.frames = static_cast<int>(c.session.size());
+  run.first_view_at_truth = measureViewAgreement(c.sessionView(0, camera, no_noise, 0), camera, session->map(),
+                                                 c.session.front().T_W_C, 4);
+  for (size_t i = 0; i < c.session.size(); ++i) {
+    const FrameReport report =
+        session->processFrame(c.sessionView(i, camera, no_noise, 0), camera, c.session[i].timestamp_s);
+    const std::string frame = c.name + " frame " + std::to_string(i) + ": " + report.track.message;
+    if (report.fused) ++run.fused_frames;
+    if (run.frames_until_found < 0 && report.track.tracked()) run.frames_until_found = static_cast<int>(i);
+    if (run.frames_until_found >= 0) {
+      const double error = (session->pose().translation() - c.session[i].T_W_C.translation()).norm();
+      run.worst_error_after_m = std::max(run.worst_error_after_m, error);
+      EXPECT_TRUE(report.fused || report.track.status == TrackStatus::kDegenerate) << frame;
+    } else {
+      EXPECT_TRUE(report.track.status == TrackStatus::kRelocalising || report.track.status == TrackStatus::kAmbiguous)
+          << frame;
+      EXPECT_FALSE(report.fused) << frame;
+    }
+    if (report.track.status == TrackStatus::kAmbiguous) {
+      ++run.ambiguous_frames;
+      EXPECT_GE(report.relocalisation.places_fitting, 2) << frame;
+      EXPECT_NE(report.track.message.find(std::to_string(report.relocalisation.places_fitting) + " places fit"),
+                std::string::npos)
+          << frame;
+    }
+  }
+  std::cout << "[ figures  ] relocalisation case " << c.name << ": first view " << std::lround(100 * run.first_view_at_truth.mappedShare())
+            << " % mapped; found on frame " << run.frames_until_found << " (-1: never) of " << run.frames << ", "
+            << run.ambiguous_frames << " frames ambiguous, worst error once found " << 1000 * run.worst_error_after_m
+            << " mm\n";
+  return run;
+}
+
+TEST(PipelineRelocalisation, ASecondSessionWhoseFirstViewIsHalfNewIsFoundAtOnce) {
+  const CaseRun run = runCase(synthetic::relocalisationCase("half-new"));
+  ASSERT_LT(run.first_view_at_truth.mappedShare(), 0.6) << "the case is a view with much of it new";
+  EXPECT_LT(run.first_view_at_truth.contradictionShare(), 0.005);
+  ASSERT_GE(run.frames_until_found, 0) << "never found";
+  EXPECT_LE(run.frames_until_found, preset("default").pipeline.relocaliser.confirm_frames);
+  EXPECT_LT(run.worst_error_after_m, 0.02);
 }
 
 TEST(PipelineRelocalisation, InTwoIdenticalRoomsNothingIsAcceptedAndTheStatusSaysAmbiguous) {
-  const synthetic::Scene rooms = synthetic::Scene::twoIdenticalRooms();
-  synthetic::NoiseModel no_noise;
-  no_noise.enabled = false;
-  const Eigen::Isometry3d room_b(Eigen::Translation3d(6.0, 0.0, 0.0));
-  // The first session maps both rooms, along the same stretch of the loop in each.
-  SdfPipeline first(preset("default").pipeline);
-  for (const Eigen::Isometry3d& room : {Eigen::Isometry3d::Identity(), room_b}) {
-    for (double t : loopTimes(0.0, 3.0)) {
-      const Eigen::Isometry3d T = room * loopPose(t);
-      first.processFrameAtPose(rooms.render(test::testCamera(), T, no_noise, 0), test::testCamera(), T, t);
-    }
-  }
-  std::unique_ptr<SdfPipeline> session = secondSession(first, "two_rooms");
-  int ambiguous = 0;
-  for (double t : loopTimes(1.0, 2.5)) {
-    const FrameReport report =
-        session->processFrame(rooms.render(test::testCamera(), loopPose(t), no_noise, 0), test::testCamera(), t);
-    ASSERT_FALSE(report.track.tracked()) << "t = " << t << ": a place was accepted in one of two identical rooms";
-    EXPECT_FALSE(report.fused);
-    if (report.track.status == TrackStatus::kAmbiguous) {
-      ++ambiguous;
-      EXPECT_EQ(report.relocalisation.places_fitting, 2);
-      EXPECT_NE(report.track.message.find("2 places fit"), std::string::npos) << report.track.message;
-    }
-  }
-  EXPECT_GE(ambiguous, 15) << "of 23 frames, the status says why nothing is accepted";
+  const CaseRun run = runCase(synthetic::relocalisationCase("two-rooms"));
+  EXPECT_EQ(run.frames_until_found, -1) << "a place was accepted in one of two identical rooms";
+  EXPECT_EQ(run.fused_frames, 0);
+  EXPECT_GE(run.ambiguous_frames, 2 * run.frames / 3) << "of " << run.frames << " frames, the status says why";
+}
+
+TEST(PipelineRelocalisation, InARoomAHalfTurnMapsOntoItselfNothingIsAcceptedAndTheStatusSaysAmbiguous) {
+  const CaseRun run = runCase(synthetic::relocalisationCase("symmetric-room"));
+  EXPECT_EQ(run.frames_until_found, -1) << "a place was accepted in a room whose half turn looks the same";
+  EXPECT_EQ(run.fused_frames, 0);
+  EXPECT_GE(run.ambiguous_frames, 2 * run.frames / 3) << "of " << run.frames << " frames, the status says why";
+}
+
+TEST(PipelineRelocalisation, OfTwoIdenticalDesksTheOneWhoseSurroundingsFitIsFound) {
+  const CaseRun run = runCase(synthetic::relocalisationCase("two-desks"));
+  ASSERT_GE(run.frames_until_found, 0) << "never found";
+  EXPECT_LE(run.frames_until_found, 10);
+  // The first desk is 2.5 m away: any frame fused there, or accepted there, is far beyond this.
+  EXPECT_LT(run.worst_error_after_m, 0.02);
 }
 
 }  // namespace

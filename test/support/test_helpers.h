@@ -49,14 +49,6 @@ inline Eigen::Isometry3d perturbed(const Eigen::Isometry3d& T, double translatio
   return T * delta;
 }
 
-/// The image with its right half holding no measurement (as if never seen).
-inline DepthImage withoutRightHalf(DepthImage depth) {
-  for (int v = 0; v < depth.height(); ++v) {
-    for (int u = depth.width() / 2; u < depth.width(); ++u) depth.at(u, v) = 0.0f;
-  }
-  return depth;
-}
-
 /// The sum of every voxel's weight: changes whenever anything is fused.
 inline double totalWeight(const TsdfMap& map) {
   double sum = 0.0;

@@ -167,7 +167,7 @@ TEST(ViewAgreement, ARightPoseWithHalfTheViewNewContradictsNothingAndAWrongOneDo
   const Eigen::Isometry3d truth = deskPose(0.0);
   const DepthImage view = test::renderRoom(truth);
   // The map saw only the left half of this view.
-  const std::unique_ptr<TsdfMap> map = mapOf(test::withoutRightHalf(view), camera, truth);
+  const std::unique_ptr<TsdfMap> map = mapOf(synthetic::withoutRightHalf(view), camera, truth);
   const ViewAgreement right = measureViewAgreement(view, camera, *map, truth, 4);
   EXPECT_GT(right.points, 4000);
   EXPECT_NEAR(right.mappedShare(), 0.5, 0.1) << "the right half is new ground";

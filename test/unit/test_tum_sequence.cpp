@@ -7,6 +7,7 @@
 #include <string>
 
 #include "sdf_tracker/io/tum_sequence.h"
+#include "sdf_tracker/sim/relocalisation_cases.h"
 #include "sdf_tracker/sim/synthetic.h"
 #include "test_helpers.h"
 
@@ -100,6 +101,36 @@ TEST(TumSequence, LensDistortionIsWhatTheDataStatesNeverInferredFromTheIntrinsic
       EXPECT_NE(std::string(e.what()).find("intrinsics"), std::string::npos) << e.what();
     }
   }
+}
+
+TEST(RelocalisationCase, IsWrittenAsTwoSessionsThatReadBackWithTheWholeCasesGroundTruth) {
+  const synthetic::RelocalisationCase c = synthetic::relocalisationCase("half-new");
+  synthetic::NoiseModel no_noise;
+  no_noise.enabled = false;
+  const PinholeCamera camera = PinholeCamera::tumFreiburg1().scaledTo(160, 120);
+  const std::string dir = test::scratchDirectory("relocalisation_case");
+  synthetic::writeRelocalisationCase(dir, c, camera, no_noise, 1);
+  const TumSequence mapping = TumSequence::open(dir + "/mapping");
+  const TumSequence session = TumSequence::open(dir + "/session");
+  ASSERT_EQ(mapping.size(), c.mapping.size());
+  ASSERT_EQ(session.size(), c.session.size());
+  EXPECT_GT(session.timestamp(0), mapping.timestamp(mapping.size() - 1)) << "the second session comes later";
+  for (const TumSequence* part : {&mapping, &session}) {
+    EXPECT_EQ(part->groundTruth().size(), c.mapping.size() + c.session.size());
+    EXPECT_EQ(part->camera().width, 160);
+  }
+  // The first session saw the left half only: its right half holds nothing, the second's does.
+  const DepthImage first = mapping.depth(0), second = session.depth(0);
+  int right_first = 0, right_second = 0;
+  for (int v = 0; v < camera.height; ++v) {
+    for (int u = camera.width / 2; u < camera.width; ++u) {
+      right_first += first.at(u, v) > 0.0f;
+      right_second += second.at(u, v) > 0.0f;
+    }
+  }
+  EXPECT_EQ(right_first, 0);
+  EXPECT_GT(right_second, camera.width * camera.height / 4);
+  EXPECT_THROW(synthetic::relocalisationCase("three-rooms"), std::invalid_argument);
 }
 
 }  // namespace

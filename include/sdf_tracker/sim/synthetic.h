@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <random>
 #include <string>
@@ -10,6 +11,7 @@
 
 #include "sdf_tracker/camera/camera.h"
 #include "sdf_tracker/camera/depth_image.h"
+#include "sdf_tracker/io/trajectory_file.h"
 #include "sdf_tracker/sim/wheel_odometry.h"
 
 /// Analytic indoor scenes rendered along scripted camera paths, with exact ground truth: the
@@ -62,9 +64,19 @@ class Scene {
   /// The scene a path is made for (`walls`: the house's, for the walk).
   static Scene forMotion(Motion motion, HouseWalls walls = HouseWalls::kFurnished);
 
-  /// Two copies of the indoor room side by side, 6 m apart along x, each closed: standing in
-  /// either, nothing tells which it is.
+  /// Two copies of the indoor room side by side, the second at secondRoom(), each closed:
+  /// standing in either, nothing tells which it is.
   static Scene twoIdenticalRooms();
+  static Eigen::Isometry3d secondRoom();  ///< 6 m along x
+  /// The indoor room's desk and furniture twice, the copy turned half round the vertical axis
+  /// through the desk (halfTurnAboutTheDesk()), in a room as wide as it is deep and centred on it:
+  /// every view is the same as the one from the opposite side of the desk.
+  static Scene symmetricRoom();
+  static Eigen::Isometry3d halfTurnAboutTheDesk();
+  /// A wider room with the indoor room's desk twice, the second at secondDesk(), and its furniture
+  /// once, around the first desk: a view of either desk is the same but for what surrounds it.
+  static Scene twoIdenticalDesks();
+  static Eigen::Isometry3d secondDesk();  ///< 2.5 m along x
 
   void add(const Primitive& p) { primitives_.push_back(p); }
   /// Adds every primitive of `other`, moved by T_W_other.
@@ -114,7 +126,20 @@ struct SequenceSpec {
   std::optional<WheelOdometryModel> odometry;
 };
 
-/// Writes depth/, depth.txt, groundtruth.txt and intrinsics.txt under `directory` (created).
+/// Writes depth/, depth.txt, groundtruth.txt, intrinsics.txt and accelerometer.txt (and
+/// odometry.txt) under `directory` (created).
 void writeSequence(const std::string& directory, const SequenceSpec& spec);
+
+/// Writes render(i), taken at poses[i], as depth/ and depth.txt (headed by `comment`), with
+/// groundtruth.txt (`ground_truth`: the poses, or a longer recording's that holds them) and
+/// intrinsics.txt, under `directory` (created): a TUM folder.
+void writeTumFolder(const std::string& directory, const std::string& comment,
+                    const std::vector<io::StampedPose>& poses, const std::vector<io::StampedPose>& ground_truth,
+                    const std::function<DepthImage(size_t)>& render, const PinholeCamera& camera,
+                    double depth_factor);
+
+/// The image with its right half (columns from width / 2) emptied: a view of which a sensor, or a
+/// session, saw only the left half.
+DepthImage withoutRightHalf(DepthImage depth);
 
 }  // namespace sdf_tracker::synthetic
