@@ -25,11 +25,12 @@ void refuseEmpty(const std::string& path, const TsdfMap& map) {
 
 }  // namespace
 
-void writeMap(const std::string& path, const TsdfMap& map, const PlaceMemory* places) {
+void writeMap(const std::string& path, const TsdfMap& map, const PlaceMemory* places,
+              const std::optional<Eigen::Isometry3d>& T_map_W) {
   if (map.observesNothing()) throwFileError(path, "not written: nothing is mapped yet (no voxel holds an observation)");
   if (hasExtension(path, ".sdfmap")) {
-    if (map.type() == MapType::kSparse) writeSparseMap(path, static_cast<const SparseTsdfMap&>(map), places);
-    else writeSparseMap(path, toSparseMap(map), places);
+    if (map.type() == MapType::kSparse) writeSparseMap(path, static_cast<const SparseTsdfMap&>(map), places, T_map_W);
+    else writeSparseMap(path, toSparseMap(map), places, T_map_W);
   } else if (hasExtension(path, ".vti")) {
     writeVti(path, toDenseVolume(map));
   } else {
@@ -38,11 +39,12 @@ void writeMap(const std::string& path, const TsdfMap& map, const PlaceMemory* pl
 }
 
 std::unique_ptr<TsdfMap> readMap(const std::string& path, bool compact_voxels, std::unique_ptr<PlaceMemory>* places,
-                                 const PlaceMemoryConfig& places_config) {
+                                 const PlaceMemoryConfig& places_config, std::optional<Eigen::Isometry3d>* T_map_W) {
   if (places) places->reset();
+  if (T_map_W) T_map_W->reset();
   if (hasExtension(path, ".sdfmap")) {
     std::optional<SavedPlaces> saved;
-    auto map = std::make_unique<SparseTsdfMap>(readSparseMap(path, places ? &saved : nullptr));
+    auto map = std::make_unique<SparseTsdfMap>(readSparseMap(path, places ? &saved : nullptr, T_map_W));
     refuseEmpty(path, *map);
     if (places && saved) {
       PlaceMemoryConfig config = places_config;

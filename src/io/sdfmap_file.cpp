@@ -30,8 +30,10 @@ class Fnv1a {
 };
 
 constexpr char kMapMagic[8] = {'S', 'D', 'F', 'T', 'M', 'A', 'P', '\n'};
-constexpr uint32_t kMapVersion = 2;
+constexpr uint32_t kMapVersion = 3;
 constexpr uint32_t kFirstMapVersion = 1;  ///< no place memory
+constexpr uint32_t kPlacesVersion = 2;    ///< from this version on: the place memory
+constexpr uint32_t kMapFrameVersion = 3;  ///< from this version on: the map frame
 
 /// The header of a .sdfmap file, field by field as stored.
 #pragma pack(push, 1)
@@ -63,10 +65,43 @@ struct KeyframePose {
   double position[3];
   double orientation[4];  ///< qx qy qz qw
 };
+/// Version 3's map frame, right after PlacesHeader.
+struct MapFrameRecord {
+  uint64_t known;  ///< 1: T_map_W holds the map frame; 0: none was saved
+  KeyframePose T_map_W;
+};
 #pragma pack(pop)
 static_assert(sizeof(MapFileHeader) == 64 && sizeof(PlacesHeader) == 48 && sizeof(KeyframePose) == 56 &&
-                  sizeof(Voxel) == 8,
+                  sizeof(MapFrameRecord) == 64 && sizeof(Voxel) == 8,
               "the .sdfmap layout is fixed");
+
+KeyframePose poseRecordOf(const Eigen::Isometry3d& T) {
+  KeyframePose pose;
+  const Eigen::Quaterniond q(T.rotation());
+  for (int axis = 0; axis < 3; ++axis) pose.position[axis] = T.translation()[axis];
+  const double orientation[4] = {q.x(), q.y(), q.z(), q.w()};
+  std::copy(orientation, orientation + 4, pose.orientation);
+  return pose;
+}
+Eigen::Isometry3d poseOf(const KeyframePose& pose) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(pose.position[0], pose.position[1], pose.position[2]);
+  T.linear() = Eigen::Quaterniond(pose.orientation[3], pose.orientation[0], pose.orientation[1], pose.orientation[2])
+                   .normalized()
+                   .toRotationMatrix();
+  return T;
+}
+
+/// Why a saved pose cannot be one ("" when it can).
+std::string poseProblem(const KeyframePose& pose) {
+  for (double x : pose.position) {
+    if (!std::isfinite(x) || std::fabs(x) > 1e7) return "position " + std::to_string(x) + " m is not a place";
+  }
+  double norm2 = 0.0;
+  for (double q : pose.orientation) norm2 += std::isfinite(q) ? q * q : 1e300;
+  if (std::fabs(std::sqrt(norm2) - 1.0) > 1e-6) return "orientation of norm " + std::to_string(std::sqrt(norm2)) + " (not a unit quaternion)";
+  return "";
+}
 
 /// The place memory's header for `keyframes` keyframes of `descriptor`, and the descriptor a
 /// header states: the one mapping between the file's fields and the config's.
@@ -88,12 +123,7 @@ PlaceDescriptorConfig descriptorOf(const PlacesHeader& header) {
 
 /// Why a saved keyframe cannot be one ("" when it can).
 std::string keyframeProblem(const KeyframePose& pose, const uint8_t* code, const PlaceDescriptorConfig& descriptor) {
-  for (double x : pose.position) {
-    if (!std::isfinite(x) || std::fabs(x) > 1e7) return "position " + std::to_string(x) + " m is not a place";
-  }
-  double norm2 = 0.0;
-  for (double q : pose.orientation) norm2 += std::isfinite(q) ? q * q : 1e300;
-  if (std::fabs(std::sqrt(norm2) - 1.0) > 1e-6) return "orientation of norm " + std::to_string(std::sqrt(norm2)) + " (not a unit quaternion)";
+  if (std::string problem = poseProblem(pose); !problem.empty()) return problem;
   for (int f = 0; f < descriptor.fern_count; ++f) {
     if (code[f] >> descriptor.tests_per_fern) {
       return "fern " + std::to_string(f) + " has code " + std::to_string(code[f]) + ", beyond its " +
@@ -105,7 +135,8 @@ std::string keyframeProblem(const KeyframePose& pose, const uint8_t* code, const
 
 }  // namespace
 
-void writeSparseMap(const std::string& path, const SparseTsdfMap& map, const PlaceMemory* places) {
+void writeSparseMap(const std::string& path, const SparseTsdfMap& map, const PlaceMemory* places,
+                    const std::optional<Eigen::Isometry3d>& T_map_W) {
   MapFileHeader header;
   std::memcpy(header.magic, kMapMagic, sizeof(kMapMagic));
   header.version = kMapVersion;
@@ -117,6 +148,9 @@ void writeSparseMap(const std::string& path, const SparseTsdfMap& map, const Pla
   header.block_count = indices.size();
   const PlacesHeader places_header = placesHeaderOf(places ? places->config().descriptor : PlaceDescriptorConfig(),
                                                    places ? places->keyframes().size() : 0);
+  MapFrameRecord map_frame{};
+  map_frame.known = T_map_W ? 1 : 0;
+  map_frame.T_map_W = poseRecordOf(T_map_W.value_or(Eigen::Isometry3d::Identity()));
 
   AtomicOutput out(path);
   Fnv1a hash;
@@ -126,6 +160,7 @@ void writeSparseMap(const std::string& path, const SparseTsdfMap& map, const Pla
   };
   put(&header, sizeof(header));
   put(&places_header, sizeof(places_header));
+  put(&map_frame, sizeof(map_frame));
   auto record = std::make_unique<MapFileBlock>();
   for (const SparseTsdfMap::BlockIndex& index : indices) {
     for (int axis = 0; axis < 3; ++axis) record->index[axis] = index[axis];
@@ -135,11 +170,7 @@ void writeSparseMap(const std::string& path, const SparseTsdfMap& map, const Pla
   }
   if (places) {
     for (const Keyframe& keyframe : places->keyframes()) {
-      KeyframePose pose;
-      const Eigen::Quaterniond q(keyframe.T_W_C.rotation());
-      for (int axis = 0; axis < 3; ++axis) pose.position[axis] = keyframe.T_W_C.translation()[axis];
-      const double orientation[4] = {q.x(), q.y(), q.z(), q.w()};
-      std::copy(orientation, orientation + 4, pose.orientation);
+      const KeyframePose pose = poseRecordOf(keyframe.T_W_C);
       put(&pose, sizeof(pose));
       put(keyframe.code.data(), keyframe.code.size());
     }
@@ -149,7 +180,8 @@ void writeSparseMap(const std::string& path, const SparseTsdfMap& map, const Pla
   out.commit();
 }
 
-SparseTsdfMap readSparseMap(const std::string& path, std::optional<SavedPlaces>* places) {
+SparseTsdfMap readSparseMap(const std::string& path, std::optional<SavedPlaces>* places,
+                            std::optional<Eigen::Isometry3d>* T_map_W) {
   uint64_t file_bytes = 0;
   std::ifstream in = openForReading(path, &file_bytes);
   MapFileHeader header;
@@ -157,7 +189,7 @@ SparseTsdfMap readSparseMap(const std::string& path, std::optional<SavedPlaces>*
       std::memcmp(header.magic, kMapMagic, sizeof(kMapMagic)) != 0) {
     throwFileError(path, "not an sdf_tracker map (.sdfmap) file");
   }
-  if (header.version != kMapVersion && header.version != kFirstMapVersion) {
+  if (header.version < kFirstMapVersion || header.version > kMapVersion) {
     throwFileError(path, "format version " + std::to_string(header.version) + "; this build reads versions " +
                    std::to_string(kFirstMapVersion) + " to " + std::to_string(kMapVersion));
   }
@@ -179,7 +211,7 @@ SparseTsdfMap readSparseMap(const std::string& path, std::optional<SavedPlaces>*
   PlacesHeader places_header{};
   PlaceDescriptorConfig descriptor;
   uint64_t keyframe_bytes = 0;
-  const bool has_places = header.version >= 2;
+  const bool has_places = header.version >= kPlacesVersion;
   if (has_places) {
     if (file_bytes < sizeof(header) + sizeof(places_header) ||
         !in.read(reinterpret_cast<char*>(&places_header), sizeof(places_header))) {
@@ -192,9 +224,26 @@ SparseTsdfMap readSparseMap(const std::string& path, std::optional<SavedPlaces>*
     }
     keyframe_bytes = sizeof(KeyframePose) + static_cast<uint64_t>(descriptor.fern_count);
   }
+  // Version 3: the map frame.
+  MapFrameRecord map_frame{};
+  const bool has_map_frame = header.version >= kMapFrameVersion;
+  if (has_map_frame) {
+    if (file_bytes < sizeof(header) + sizeof(places_header) + sizeof(map_frame) ||
+        !in.read(reinterpret_cast<char*>(&map_frame), sizeof(map_frame))) {
+      throwFileError(path, "truncated in the map frame");
+    }
+    hash.add(&map_frame, sizeof(map_frame));
+    if (map_frame.known > 1) throwFileError(path, "map frame: flag " + std::to_string(map_frame.known) + " is neither 0 nor 1");
+    if (map_frame.known == 1) {
+      if (const std::string problem = poseProblem(map_frame.T_map_W); !problem.empty()) {
+        throwFileError(path, "map frame: " + problem);
+      }
+    }
+  }
   // The length must match the counts exactly before anything is allocated for blocks or keyframes.
   const uint64_t block_bytes = sizeof(MapFileBlock);
-  const uint64_t headers = sizeof(header) + (has_places ? sizeof(places_header) : 0);
+  const uint64_t headers =
+      sizeof(header) + (has_places ? sizeof(places_header) : 0) + (has_map_frame ? sizeof(map_frame) : 0);
   const uint64_t payload = file_bytes - headers;
   // In 64 bits the sum may wrap for counts no file could hold: say so rather than a wrong size.
   const uint64_t limit = UINT64_MAX / 4;
@@ -248,11 +297,7 @@ SparseTsdfMap readSparseMap(const std::string& path, std::optional<SavedPlaces>*
     const std::string problem = keyframeProblem(pose, code.data(), descriptor);
     if (!problem.empty()) throwFileError(path, "keyframe " + std::to_string(k) + ": " + problem);
     Keyframe keyframe;
-    keyframe.T_W_C.translation() = Eigen::Vector3d(pose.position[0], pose.position[1], pose.position[2]);
-    keyframe.T_W_C.linear() =
-        Eigen::Quaterniond(pose.orientation[3], pose.orientation[0], pose.orientation[1], pose.orientation[2])
-            .normalized()
-            .toRotationMatrix();
+    keyframe.T_W_C = poseOf(pose);
     keyframe.code = code;
     saved.keyframes.push_back(std::move(keyframe));
   }
@@ -263,6 +308,10 @@ SparseTsdfMap readSparseMap(const std::string& path, std::optional<SavedPlaces>*
   if (places) {
     places->reset();
     if (has_places) *places = std::move(saved);
+  }
+  if (T_map_W) {
+    T_map_W->reset();
+    if (map_frame.known == 1) *T_map_W = poseOf(map_frame.T_map_W);
   }
   return map;
 }

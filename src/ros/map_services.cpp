@@ -39,9 +39,8 @@ void requireWritableFolder(const std::string& parameter, const std::string& path
 
 }  // namespace
 
-MapServices::MapServices(ros::NodeHandle pnh, TrackerState& state, const NodeOptions& options,
-                         std::function<Eigen::Isometry3d()> T_map_W)
-    : state_(state), options_(options), T_map_W_(std::move(T_map_W)) {
+MapServices::MapServices(ros::NodeHandle pnh, TrackerState& state, const NodeOptions& options, PoseBroadcaster& poses)
+    : state_(state), options_(options), poses_(poses) {
   // A file that could not be written at shut-down is refused now, not after the run.
   const std::vector<std::pair<std::string, std::string>> outputs = {
       {"~trajectory_file", options_.trajectory_file}, {"~mesh_file", options_.mesh_file},
@@ -118,7 +117,7 @@ bool MapServices::writeAtShutdown() {
   }
   if (options_.output_volume) {
     const std::string path = outputPath("", "sdf_volume.vti");
-    attempt("volume", path, [&] { st::io::writeMap(path, *map, &places); });
+    attempt("volume", path, [&] { st::io::writeMap(path, *map, &places, poses_.fixedMapFrame()); });
   }
   std::fflush(stdout);
   return all_written;
@@ -172,7 +171,7 @@ bool MapServices::saveVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
     const std::string path = outputPath(req.path, "sdf_volume.vti");
     std::vector<st::io::StampedPose> trajectory;
     st::PlaceMemory places;
-    st::io::writeMap(path, *copyMap(&trajectory, &places), &places);
+    st::io::writeMap(path, *copyMap(&trajectory, &places), &places, poses_.fixedMapFrame());
     writeTrajectory(trajectory);
     return "wrote the map to " + path + (st::io::hasExtension(path, ".sdfmap")
                                             ? " with " + std::to_string(places.keyframes().size()) + " keyframes"
@@ -194,7 +193,7 @@ bool MapServices::saveVolumeRegion(sdf_tracker::SaveRegion::Request& req, sdf_tr
       throw std::invalid_argument(msg.str());
     }
     // The box along the tracker's axes that holds the one given in the map frame.
-    const Eigen::AlignedBox3d box_W = st::transformedBox(T_map_W_().inverse(), Eigen::AlignedBox3d(min_map, max_map));
+    const Eigen::AlignedBox3d box_W = st::transformedBox(poses_.T_map_W().inverse(), Eigen::AlignedBox3d(min_map, max_map));
     const st::TsdfVolume region = st::toDenseVolume(*copyMap(nullptr), box_W);
     st::io::writeVti(path, region);
     const Eigen::Vector3i dims = region.dims();
@@ -215,13 +214,15 @@ bool MapServices::loadVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
     }
     // Read before taking the lock.
     std::unique_ptr<st::PlaceMemory> places;
-    std::unique_ptr<st::TsdfMap> loaded = st::io::readMap(path, compact, &places, places_config);
+    std::optional<Eigen::Isometry3d> T_map_W;
+    std::unique_ptr<st::TsdfMap> loaded = st::io::readMap(path, compact, &places, places_config, &T_map_W);
     std::lock_guard<std::mutex> lock(state_.mutex);
     const std::string held = st::io::describeLoadedPlaces(places.get(), state_.pipeline->config().relocalise);
     state_.pipeline->setMap(std::move(loaded), std::move(places));
     state_.trajectory.clear();
     state_.restarted = true;
-    return "tracking against " + path + ", which " + held;
+    if (T_map_W) poses_.restoreMapFrame(*T_map_W);
+    return "tracking against " + path + ", which " + held + "; " + describeLoadedMapFrame(T_map_W.has_value());
   });
 }
 

@@ -95,6 +95,25 @@ void PoseBroadcaster::onImu(const sensor_msgs::ImuConstPtr& imu) {
   imu_frame_ = stripSlash(imu->header.frame_id);
 }
 
+std::string describeLoadedMapFrame(bool saved) {
+  if (saved) return "poses go out in the map frame it was saved with";
+  return "it keeps no map frame (a .vti, a .sdfmap from an offline run or of format version 2 or older): poses go "
+         "out in this node's map frame, which a new session levels where the camera is found, and which may be "
+         "tilted from the saving session's";
+}
+
+std::optional<Eigen::Isometry3d> PoseBroadcaster::fixedMapFrame() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return map_frame_fixed_ ? std::optional<Eigen::Isometry3d>(T_map_W_) : std::nullopt;
+}
+
+void PoseBroadcaster::restoreMapFrame(const Eigen::Isometry3d& T_map_W) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  T_map_W_ = T_map_W;
+  map_frame_fixed_ = true;
+  accelerations_.clear();
+}
+
 void PoseBroadcaster::clearPath() {
   path_poses_.clear();
   path_.poses.clear();

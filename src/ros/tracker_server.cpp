@@ -57,21 +57,24 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
   for (const auto& warning : warnings) ROS_WARN("sdf_tracker: %s", warning.c_str());
   camera_settings_ = settings.camera;
   state_.pipeline = std::make_unique<st::SdfPipeline>(settings.pipeline);
+  std::optional<Eigen::Isometry3d> loaded_map_frame;
   if (options_.load_volume != "none" && !options_.load_volume.empty()) {
     std::unique_ptr<st::PlaceMemory> places;
     std::unique_ptr<st::TsdfMap> map = st::io::readMap(options_.load_volume, settings.pipeline.volume.compact_voxels,
-                                                       &places, settings.pipeline.places);
+                                                       &places, settings.pipeline.places, &loaded_map_frame);
     const std::string held = st::io::describeLoadedPlaces(places.get(), settings.pipeline.relocalise);
     state_.pipeline->setMap(std::move(map), std::move(places));
-    ROS_INFO("sdf_tracker: tracking against the map in %s (%s), which %s", options_.load_volume.c_str(),
-             state_.pipeline->config().volume.describe().c_str(), held.c_str());
+    ROS_INFO("sdf_tracker: tracking against the map in %s (%s), which %s; %s", options_.load_volume.c_str(),
+             state_.pipeline->config().volume.describe().c_str(), held.c_str(),
+             describeLoadedMapFrame(loaded_map_frame.has_value()).c_str());
   }
 
   poses_ = std::make_unique<PoseBroadcaster>(nh_, pnh_, options_);
+  if (loaded_map_frame) poses_->restoreMapFrame(*loaded_map_frame);
   status_pub_ = pnh_.advertise<sdf_tracker::TrackingStatus>("status", 10);
   denoised_pub_ = it_.advertise(options_.camera_name + "/depth/image_denoised", 1);
   const PoseBroadcaster* poses = poses_.get();
-  services_ = std::make_unique<MapServices>(pnh_, state_, options_, [poses] { return poses->T_map_W(); });
+  services_ = std::make_unique<MapServices>(pnh_, state_, options_, *poses_);
   map_publisher_ = std::make_unique<MapPublisher>(
       pnh_, state_.mutex, [this]() -> const st::TsdfMap* { return &state_.pipeline->map(); },
       [poses] { return poses->T_map_W(); },

@@ -171,27 +171,35 @@ TEST_F(NodeRelocalisationTest, APoseOnInitialposeIsVerifiedAndTheCameraTrackedFr
   expectTrackedAtTheTruth(last);
 }
 
-TEST_F(NodeRelocalisationTest, ASecondSessionWhoseFirstViewIsHalfNewIsFoundWithinItsConfirmation) {
+TEST_F(NodeRelocalisationTest, ASecondSessionWhoseFirstViewIsHalfNewIsFoundInTheMapFrameItWasSavedWith) {
   // Issue 42: the first session saw only the left half of its views (sim's "half-new" case), mapped
-  // beside the node as a user's earlier session was and saved; the node loads it, and the second
-  // session's first view is half ground that map never saw.
+  // beside the node as a user's earlier session was and saved with the map frame it published in,
+  // tilted here by 3 degrees from this node's; the node loads it, and the second session's first
+  // view is half ground that map never saw. A second session levelled its map frame anew (from
+  // the accelerometer where the camera was found, as it moved), and its poses were off by the tilt.
   const st::synthetic::RelocalisationCase half_new = st::synthetic::relocalisationCase("half-new");
   st::synthetic::NoiseModel exact;
   exact.enabled = false;
-  const std::string path = "/tmp/sdf_tracker_node_test_half_new.sdfmap";
   const st::PipelineConfig config = st::preset("default").pipeline;
+  const Eigen::Isometry3d node_frame = sdf_tracker_ros::mapFromOpticalWorld();
+  const Eigen::Isometry3d saved_frame =
+      Eigen::Isometry3d(Eigen::AngleAxisd(3.0 * M_PI / 180.0, Eigen::Vector3d::UnitX())) * node_frame;
+  const std::string path = "/tmp/sdf_tracker_node_test_half_new.sdfmap";
+  const std::string path_in_node_frame = "/tmp/sdf_tracker_node_test_half_new_node_frame.sdfmap";
   {
     st::SdfPipeline first(config);
     for (size_t i = 0; i < half_new.mapping.size(); ++i) {
       first.processFrameAtPose(half_new.mappingView(i, kQvga, exact, 0), kQvga, half_new.mapping[i].T_W_C,
                                half_new.mapping[i].timestamp_s);
     }
-    st::io::writeMap(path, first.map(), &first.places());
+    st::io::writeMap(path, first.map(), &first.places(), saved_frame);
+    st::io::writeMap(path_in_node_frame, first.map(), &first.places(), node_frame);
   }
   sdf_tracker::SavePath load;
   load.request.path = path;
   ASSERT_TRUE(callService("sdf_tracker/load_volume", load));
   ASSERT_TRUE(load.response.success) << load.response.message;
+  EXPECT_NE(load.response.message.find("the map frame it was saved with"), std::string::npos) << load.response.message;
 
   const double first_stamp_s = 1000.0;
   sdf_tracker::TrackingStatus status;
@@ -211,11 +219,29 @@ TEST_F(NodeRelocalisationTest, ASecondSessionWhoseFirstViewIsHalfNewIsFoundWithi
   EXPECT_LE(frame, static_cast<size_t>(config.relocaliser.confirm_frames)) << "found late";
   const std::optional<Eigen::Isometry3d> pose = poseAt(status.header.stamp.toSec());
   ASSERT_TRUE(pose) << "no ~pose for the frame that was tracked";
-  const Eigen::Isometry3d truth = sdf_tracker_ros::mapFromOpticalWorld() * half_new.session[frame].T_W_C;
+  const Eigen::Isometry3d truth = saved_frame * half_new.session[frame].T_W_C;
   const double error_m = (pose->translation() - truth.translation()).norm();
-  std::cout << "[ figures  ] found " << error_m * 1000 << " mm from the truth\n";
+  const double error_in_node_frame_m = (pose->translation() - (node_frame * half_new.session[frame].T_W_C).translation()).norm();
+  std::cout << "[ figures  ] found " << error_m * 1000 << " mm from the truth in the saved map frame ("
+            << error_in_node_frame_m * 1000 << " mm from it in the node's own)\n";
   EXPECT_LT(error_m, kMaxPositionError_m);
+  EXPECT_GT(error_in_node_frame_m, 2 * error_m) << "the case must tell the two frames apart";
   expectNoPoseBetween(first_stamp_s, first_stamp_s + (frame - 0.5) / 15.0);
+
+  // What save_volume writes keeps the frame the node publishes in: the one restored.
+  sdf_tracker::SavePath save;
+  save.request.path = "/tmp/sdf_tracker_node_test_saved_frame.sdfmap";
+  ASSERT_TRUE(callService("sdf_tracker/save_volume", save));
+  ASSERT_TRUE(save.response.success) << save.response.message;
+  std::optional<Eigen::Isometry3d> written_frame;
+  st::io::readMap(save.request.path, false, nullptr, st::PlaceMemoryConfig(), &written_frame);
+  ASSERT_TRUE(written_frame) << "save_volume kept no map frame";
+  EXPECT_TRUE(written_frame->isApprox(saved_frame, 1e-9));
+
+  // The node as the other tests expect it: publishing in its own map frame again.
+  load.request.path = path_in_node_frame;
+  ASSERT_TRUE(callService("sdf_tracker/load_volume", load));
+  ASSERT_TRUE(load.response.success) << load.response.message;
 }
 
 }  // namespace

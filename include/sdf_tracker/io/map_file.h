@@ -1,7 +1,10 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
+
+#include <Eigen/Geometry>
 
 #include "sdf_tracker/map/tsdf_map.h"
 #include "sdf_tracker/places/place_memory.h"
@@ -11,14 +14,18 @@ namespace sdf_tracker::io {
 /// A map file chosen by its extension: .sdfmap (writeSparseMap, with the place memory; a dense
 /// grid is stored as its observed blocks, and read back sparse) or .vti (writeVti; a sparse map
 /// as the box around its blocks, read back dense; no place memory). Other extensions are refused,
-/// naming the path.
-void writeMap(const std::string& path, const TsdfMap& map, const PlaceMemory* places = nullptr);
+/// naming the path. `T_map_W`, the frame the map is published in (writeSparseMap), is kept by a
+/// .sdfmap only.
+void writeMap(const std::string& path, const TsdfMap& map, const PlaceMemory* places = nullptr,
+              const std::optional<Eigen::Isometry3d>& T_map_W = std::nullopt);
 /// `places`, when given, receives the file's place memory (its descriptor as saved, the rest of
 /// its settings from `places_config`), or nullptr when the file holds none (a .vti, a version 1
-/// .sdfmap).
+/// .sdfmap); `T_map_W` the saved map frame, or nothing (a .vti, a .sdfmap before version 3, one
+/// saved without).
 std::unique_ptr<TsdfMap> readMap(const std::string& path, bool compact_voxels = false,
                                  std::unique_ptr<PlaceMemory>* places = nullptr,
-                                 const PlaceMemoryConfig& places_config = PlaceMemoryConfig());
+                                 const PlaceMemoryConfig& places_config = PlaceMemoryConfig(),
+                                 std::optional<Eigen::Isometry3d>* T_map_W = nullptr);
 
 /// What a loaded map's place memory (readMap's `places`: none, or with its keyframes) brings for
 /// finding the camera in it, said after the file's name: "holds 12 keyframes in its place memory:

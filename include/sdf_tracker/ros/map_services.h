@@ -13,6 +13,7 @@
 #include "sdf_tracker/SavePath.h"
 #include "sdf_tracker/SaveRegion.h"
 #include "sdf_tracker/ros/parameters.h"
+#include "sdf_tracker/ros/pose_broadcaster.h"
 #include "sdf_tracker/ros/tracker_state.h"
 
 namespace sdf_tracker_ros {
@@ -23,11 +24,11 @@ namespace sdf_tracker_ros {
 /// copies the map under the lock and extracts from the copy, so tracking waits only for the copy.
 class MapServices {
  public:
-  /// `T_map_W` gives the map frame's pose in the tracker's world (for boxes given in the map frame).
+  /// `poses` gives the map frame (for boxes given in the map frame; saved with a .sdfmap, and
+  /// restored from one that keeps it).
   /// Throws std::invalid_argument, naming the parameter and the path, when a file to be written at
   /// shut-down could not be: its folder is missing or not writable (checked now, not after the run).
-  MapServices(ros::NodeHandle pnh, TrackerState& state, const NodeOptions& options,
-              std::function<Eigen::Isometry3d()> T_map_W);
+  MapServices(ros::NodeHandle pnh, TrackerState& state, const NodeOptions& options, PoseBroadcaster& poses);
 
   /// Writes every file the options ask for and says on stdout what it wrote and on stderr what
   /// failed (rosconsole may be gone at shut-down); never throws. False when a write failed.
@@ -54,7 +55,7 @@ class MapServices {
 
   TrackerState& state_;
   NodeOptions options_;
-  std::function<Eigen::Isometry3d()> T_map_W_;
+  PoseBroadcaster& poses_;
   ros::ServiceServer reset_srv_, relocalise_srv_, save_mesh_srv_, save_volume_srv_, save_volume_region_srv_, load_volume_srv_;
 };
 

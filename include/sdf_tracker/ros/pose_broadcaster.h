@@ -47,6 +47,10 @@ constexpr double kMinGravityReading = 2.0;
 constexpr double kMaxGravityReading = 30.0;
 bool isGravityReading(const Eigen::Vector3d& acceleration);
 
+/// What a loaded map brings for the map frame, in words: the frame it was saved with (`saved`),
+/// or none, and what the node then publishes in.
+std::string describeLoadedMapFrame(bool saved);
+
 /// Puts the tracker's estimate on the tf tree the user already has (REP 105): publishes
 /// map -> base, where base is ~base_frame (its mounting base -> camera looked up in tf) or else the
 /// camera frame itself, so that map -> camera is the estimate. With ~odom_frame the robot's
@@ -96,6 +100,14 @@ class PoseBroadcaster {
     return T_map_W_;
   }
   const std::string& mapFrame() const { return frames_.map_frame; }
+  /// The map frame once it is fixed (at the first published pose, levelled when an IMU is given,
+  /// or restored): what a saved map keeps, so that a later session publishes in the same frame.
+  /// None before.
+  std::optional<Eigen::Isometry3d> fixedMapFrame() const;
+  /// Publishes in `T_map_W` from now on, as the session that saved a loaded map did: it is not
+  /// levelled again (levelling from the accelerometer where the camera is found, as it moves,
+  /// tilts the frame from the first session's by up to a few degrees, which moves every pose).
+  void restoreMapFrame(const Eigen::Isometry3d& T_map_W);
   /// Forgets the path (after ~reset or a loaded map).
   void clearPath();
 
@@ -114,9 +126,8 @@ class PoseBroadcaster {
   int path_length_;
   mutable std::mutex mutex_;  ///< guards T_map_W_, map_frame_fixed_ and the IMU samples
   Eigen::Isometry3d T_map_W_;
-  /// Set at the first published pose (after levelling, when an IMU is given): in a loaded map,
-  /// once the camera has been found in it, so that the map frame is levelled as in the session
-  /// that built the map.
+  /// Set at the first published pose (after levelling, when an IMU is given; in a loaded map that
+  /// keeps no map frame, once the camera has been found in it), or by restoreMapFrame().
   bool map_frame_fixed_ = false;
   std::set<std::string> refused_children_;
   std::string odometry_problem_;
