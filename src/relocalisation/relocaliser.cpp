@@ -177,9 +177,12 @@ Relocaliser::Step Relocaliser::step(const DepthImage& depth, const PinholeCamera
     const bool holds = fits(track, depth, camera, map, &agreement);
     consider(std::move(track), agreement, holds, h.confirmed);
   }
-  // Every frame searches, a confirming one too: a second place that fits as well makes the view
-  // ambiguous, however well the first goes on fitting.
-  for (const Eigen::Isometry3d& start : startingPoses(depth, places, guesses)) {
+  // A confirming frame searches too: a second place that fits as well makes the view ambiguous,
+  // however well the first goes on fitting. While two or more places still fit, the view is
+  // ambiguous already and nothing could be accepted: the frame only follows them.
+  const bool still_ambiguous = fitting.size() > 1;
+  for (const Eigen::Isometry3d& start :
+       still_ambiguous ? std::vector<Eigen::Isometry3d>() : startingPoses(depth, places, guesses)) {
     if (known(start)) continue;
     ++result.candidates_tried;
     ++candidates_tried_;

@@ -49,7 +49,8 @@ struct RelocaliserConfig {
 /// with the full schedule), and verified by what the map knows (see RelocaliserConfig). A
 /// candidate that fits is followed, tracked frame to frame and verified again, over
 /// confirm_frames frames before it is accepted; those frames go on searching, and a second place
-/// that fits as well makes the view ambiguous: nothing is kept until it tells them apart. It
+/// that fits as well makes the view ambiguous: nothing is kept until it tells them apart (while
+/// two or more fit, frames only follow them, without searching). It
 /// never writes into the map: fusing is the caller's, after acceptance. Not thread safe.
 class Relocaliser {
  public:
