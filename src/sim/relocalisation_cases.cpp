@@ -25,7 +25,6 @@ double afterMapping(const RelocalisationCase& c) { return c.mapping.back().times
 
 RelocalisationCase halfNew() {
   RelocalisationCase c;
-  c.name = "half-new";
   c.description =
       "the first session saw the left half of each view along 2 s of the loop round the desk; the second "
       "starts where the first left off, its first view half ground the map never saw";
@@ -38,7 +37,6 @@ RelocalisationCase halfNew() {
 
 RelocalisationCase twoRooms() {
   RelocalisationCase c;
-  c.name = "two-rooms";
   c.description =
       "two identical rooms, each mapped along the same 3 s of the loop; the second session walks 1.5 s of that "
       "stretch in the first room: nothing tells which room it is in";
@@ -52,7 +50,6 @@ RelocalisationCase twoRooms() {
 
 RelocalisationCase symmetricRoom() {
   RelocalisationCase c;
-  c.name = "symmetric-room";
   c.description =
       "a room that a half turn about the desk maps onto itself, mapped along two opposite quarters of the loop; "
       "the second session walks within the first quarter: every view fits it and its half turn alike";
@@ -66,7 +63,6 @@ RelocalisationCase symmetricRoom() {
 
 RelocalisationCase twoDesks() {
   RelocalisationCase c;
-  c.name = "two-desks";
   c.description =
       "two identical desks in one room, each mapped along 4 s of the loop round it, the furniture round the "
       "first only; the second session circles the second desk: the desk fits at either, what surrounds it "
@@ -106,7 +102,11 @@ std::vector<std::string> relocalisationCaseNames() {
 RelocalisationCase relocalisationCase(const std::string& name) {
   std::string known;
   for (const auto& [case_name, make] : cases()) {
-    if (case_name == name) return make();
+    if (case_name == name) {
+      RelocalisationCase c = make();
+      c.name = case_name;  // the table's name, the one place it is spelt
+      return c;
+    }
     known += (known.empty() ? "" : " | ") + case_name;
   }
   throw std::invalid_argument("no relocalisation case \"" + name + "\" (the cases: " + known + ")");
