@@ -1,5 +1,6 @@
 #include "sdf_tracker/devices/recording.h"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -9,7 +10,10 @@
 namespace sdf_tracker::devices {
 
 double rosStampOffset(const TumSequence& sequence) {
-  return sequence.size() > 0 && sequence.timestamp(0) < 1.0 ? 1.0 : 0.0;
+  if (sequence.size() == 0) return 0.0;
+  double start_s = sequence.timestamp(0);
+  if (!sequence.groundTruth().empty()) start_s = std::min(start_s, sequence.groundTruth().front().timestamp_s);
+  return start_s < 1.0 ? 1.0 : 0.0;
 }
 
 std::string calibrationFileFor(const std::string& recording) {

@@ -62,7 +62,8 @@ Eigen::Isometry3d placedOnPlane(const Eigen::Isometry3d& T_map_body, const Eigen
   return T;
 }
 
-PoseBroadcaster::PoseBroadcaster(ros::NodeHandle nh, ros::NodeHandle pnh, const NodeOptions& options)
+PoseBroadcaster::PoseBroadcaster(ros::NodeHandle nh, ros::NodeHandle pnh, const NodeOptions& options,
+                                 const std::optional<Eigen::Isometry3d>& saved_map_frame)
     : frames_(options.frames),
       path_length_(options.path_length),
       T_map_W_(mapFromOpticalWorld()),
@@ -72,9 +73,15 @@ PoseBroadcaster::PoseBroadcaster(ros::NodeHandle nh, ros::NodeHandle pnh, const 
   odom_pub_ = pnh.advertise<nav_msgs::Odometry>("odom", 10);
   path_pub_ = pnh.advertise<nav_msgs::Path>("path", 1, true);
   path_.header.frame_id = frames_.map_frame;
+  if (saved_map_frame) restoreMapFrame(*saved_map_frame);
   if (!options.imu_topic.empty()) {
     imu_sub_ = nh.subscribe(options.imu_topic, 200, &PoseBroadcaster::onImu, this);
-    ROS_INFO("sdf_tracker: levelling the map frame with gravity from %s", imu_sub_.getTopic().c_str());
+    if (saved_map_frame) {
+      ROS_INFO("sdf_tracker: the loaded map keeps the map frame it was saved with: %s (imu_topic) does not level it again",
+               imu_sub_.getTopic().c_str());
+    } else {
+      ROS_INFO("sdf_tracker: levelling the map frame with gravity from %s", imu_sub_.getTopic().c_str());
+    }
   }
 }
 

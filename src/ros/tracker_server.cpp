@@ -69,8 +69,7 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
              describeLoadedMapFrame(loaded_map_frame.has_value()).c_str());
   }
 
-  poses_ = std::make_unique<PoseBroadcaster>(nh_, pnh_, options_);
-  if (loaded_map_frame) poses_->restoreMapFrame(*loaded_map_frame);
+  poses_ = std::make_unique<PoseBroadcaster>(nh_, pnh_, options_, loaded_map_frame);
   status_pub_ = pnh_.advertise<sdf_tracker::TrackingStatus>("status", 10);
   denoised_pub_ = it_.advertise(options_.camera_name + "/depth/image_denoised", 1);
   const PoseBroadcaster* poses = poses_.get();

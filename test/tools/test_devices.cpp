@@ -9,6 +9,7 @@
 #include "sdf_tracker/devices/fakenect_dump.h"
 #include "sdf_tracker/devices/kinect_disparity.h"
 #include "sdf_tracker/devices/recording.h"
+#include "sdf_tracker/io/tum_sequence.h"
 #include "test_helpers.h"
 
 namespace sdf_tracker::devices {
@@ -126,6 +127,25 @@ TEST(FakenectDump, AFrameCutShortOrMissingIsNamedWithWhatItLacks) {
   EXPECT_NE(frames[1].problem.find("holds 307208 bytes of the 614417 a 640x480 frame needs"), std::string::npos)
       << frames[1].problem;
   EXPECT_EQ(frames[2].problem, "cannot be opened");
+  fs::remove_all(root);
+}
+
+TEST(RecordingClock, IsShiftedWhenTheDepthOrTheGroundTruthStartsBelowOneSecond) {
+  const std::string root = test::scratchDirectory("recording_clock");
+  auto folder = [&root](const std::string& name, const std::string& depth, const std::string& truth) {
+    const std::string dir = root + "/" + name;
+    fs::create_directories(dir);
+    std::ofstream(dir + "/depth.txt") << depth;
+    if (!truth.empty()) std::ofstream(dir + "/groundtruth.txt") << truth;
+    return TumSequence::open(dir);
+  };
+  const std::string pose = " 0 0 0 0 0 0 1\n";
+  EXPECT_EQ(rosStampOffset(folder("from_zero", "0.0 depth/a.png\n0.033 depth/b.png\n", "")), 1.0);
+  EXPECT_EQ(rosStampOffset(folder("unix_time", "1305031102.175 depth/a.png\n", "1305031102.1 " + pose)), 0.0);
+  // A later part cut from a sequence that starts at 0 s: its depth starts at 20 s, its ground
+  // truth (kept whole, for the evaluation) at 0 s, and a bag of it holds both.
+  EXPECT_EQ(rosStampOffset(folder("later_part", "20.6 depth/a.png\n20.633 depth/b.png\n",
+                                  "0.0" + pose + "20.6" + pose)), 1.0);
   fs::remove_all(root);
 }
 

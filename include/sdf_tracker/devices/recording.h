@@ -11,7 +11,9 @@ class TumSequence;
 namespace sdf_tracker::devices {
 
 /// Seconds added to a sequence's stamps when it becomes a ROS recording (bag, fakenect dump,
-/// .oni): 1 s if they start below 1 s, since ROS time 0 means "no time"; otherwise none.
+/// .oni): 1 s if its clock starts below 1 s, since ROS time 0 means "no time"; otherwise none.
+/// The clock starts at the first depth frame or ground-truth pose, whichever is earlier: a part
+/// cut from a sequence that starts at 0 s keeps the whole ground truth, and so the whole shift.
 double rosStampOffset(const TumSequence& sequence);
 
 /// Where a recording's depth calibration lives, in camera_info_manager's YAML: inside a folder

@@ -62,7 +62,9 @@ std::string describeLoadedMapFrame(bool saved);
 /// (not held poses) ~pose and a bounded ~path. Called from the frame thread only.
 class PoseBroadcaster {
  public:
-  PoseBroadcaster(ros::NodeHandle nh, ros::NodeHandle pnh, const NodeOptions& options);
+  /// `saved_map_frame`: the frame of a map loaded at start-up that keeps one (see restoreMapFrame).
+  PoseBroadcaster(ros::NodeHandle nh, ros::NodeHandle pnh, const NodeOptions& options,
+                  const std::optional<Eigen::Isometry3d>& saved_map_frame = std::nullopt);
 
   /// With ~odom_frame: the camera's pose in the robot's odometry frame at `stamp` (odom -> base
   /// from the robot's odometry, base -> camera its mounting, through tf). While the odometry
