@@ -71,6 +71,8 @@ cut_sequence() {
     { for (i = 1; i <= n; i++) if (NR - 1 >= lo[i] && NR - 1 <= hi[i]) { print; break } }' > "$dest/depth.txt"
 }
 offline() { "$bin/sdf_tracker_offline" --quiet --threads 2 "$@"; }
+# publish PART REPORT: the finished report put in place (a run stopped half-way leaves only PART).
+publish() { mv "$1" "$2"; cat "$2"; echo "wrote $2"; }
 json() { /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); print(eval(sys.argv[2]))" "$@"; }
 frames_in() { grep -vc '^#' "$1/depth.txt"; }
 
@@ -249,9 +251,7 @@ if [ "$mode" = --node ]; then
       echo "| $name | $play | ${line//|/ | } |" >> "$report.part"
     done
   done
-  mv "$report.part" "$report"
-  cat "$report"
-  echo "wrote $report"
+  publish "$report.part" "$report"
   exit 0
 fi
 
@@ -296,9 +296,7 @@ if [ "$mode" = --sweep ]; then
       echo "$row $total_false |" >> "$report.part"
     done
   done
-  mv "$report.part" "$report"
-  cat "$report"
-  echo "wrote $report"
+  publish "$report.part" "$report"
   exit 0
 fi
 
@@ -361,6 +359,4 @@ for entry in "${cases[@]}"; do
   echo "| $name | $on | $off | $keyframes | $bytes |" >> "$report.table"
 done
 [ ${#notes[@]} -eq 0 ] || { echo; printf '%s\n' "${notes[@]}"; } >> "$report.table"
-mv "$report.table" "$report"
-cat "$report"
-echo "wrote $report"
+publish "$report.table" "$report"
