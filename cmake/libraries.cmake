@@ -1,7 +1,8 @@
 # The ROS-free parts of the package (the tracker, its file formats, the simulator, the evaluation,
 # the cameras' recording formats and the command-line tools) and the unit tests' sources. Included
 # by the catkin package (CMakeLists.txt) and by the sanitizer/fuzzing build (test/sanitize/), so
-# each list exists once. Expects Eigen3, OpenCV and (optionally) OpenMP to be found by the includer.
+# each list exists once. Expects Eigen3, OpenCV, Ceres and (optionally) OpenMP to be found by the
+# includer.
 # The parts and their arrows are drawn in doc/ARCHITECTURE.md; cmake/layers.cmake enforces them.
 
 get_filename_component(SDF_TRACKER_ROOT "${CMAKE_CURRENT_LIST_DIR}/.." ABSOLUTE)
@@ -26,6 +27,8 @@ sdf_tracker_part(surface SOURCES chunked_mesh raycaster surface DEPENDS camera m
 sdf_tracker_part(places SOURCES place_descriptor place_memory DEPENDS camera)
 sdf_tracker_part(relocalisation SOURCES coarse_field relocaliser view_agreement DEPENDS tracking surface places)
 sdf_tracker_part(pipeline SOURCES parameters pipeline DEPENDS fusion tracking surface relocalisation)
+# Loop closure: the pose graph over submaps, solved by Ceres.
+sdf_tracker_part(graph SOURCES pose_graph DEPENDS util LINK Ceres::ceres)
 
 # Around the tracker: files (OpenCV for PNG only), the synthetic scenes, trajectory errors.
 sdf_tracker_part(io SOURCES depth_png files map_file mesh_file sdfmap_file trajectory_file tum_sequence vti_file
@@ -58,11 +61,12 @@ set(SDF_TRACKER_UNIT_TEST_SOURCES
   ${SDF_TRACKER_TEST_DIR}/unit/test_evaluation.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_parameters.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_pipeline.cpp
+  ${SDF_TRACKER_TEST_DIR}/unit/test_pose_graph.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_raycaster.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_relocalisation.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_sparse_map.cpp
 )
-set(SDF_TRACKER_UNIT_TEST_LIBRARIES sdf_tracker_pipeline sdf_tracker_io sdf_tracker_sim sdf_tracker_eval)
+set(SDF_TRACKER_UNIT_TEST_LIBRARIES sdf_tracker_pipeline sdf_tracker_graph sdf_tracker_io sdf_tracker_sim sdf_tracker_eval)
 # Whole sequences through the pipeline, synthetic and (when ../shared/data has them) real: seconds
 # to a minute each, run in the release build only.
 set(SDF_TRACKER_SEQUENCE_TEST_SOURCES ${SDF_TRACKER_TEST_DIR}/support/test_main.cpp

@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build catkin ros-base-dev
-  libeigen3-dev libopencv-dev libgtest-dev
+  libeigen3-dev libopencv-dev libgtest-dev libceres-dev
   libpcl-dev libpcl-conversions-dev libtf2-ros-dev libtf2-eigen-dev libcv-bridge-dev libimage-transport-dev
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure python3-rostest librostest-dev
   python3-rosbag python3-rospy libopenni2-dev libtf-dev libtopic-tools-dev rviz
