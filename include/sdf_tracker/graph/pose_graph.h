@@ -7,8 +7,9 @@
 
 namespace sdf_tracker {
 
-/// Information (inverse covariance) of a relative pose, over (translation in metres, rotation
-/// vector in radians), both in the frame of the edge's `from` node.
+/// Information (inverse covariance) of a relative pose, over the error (translation in metres,
+/// rotation vector in radians) of T_measured^-1 * T_estimated, i.e. in the frame of the `to` node
+/// as measured.
 using PoseInformation = Eigen::Matrix<double, 6, 6>;
 
 /// What an edge of the pose graph was measured by.
@@ -55,7 +56,8 @@ struct PoseGraphSolution {
 /// between them. optimise() finds the poses that agree best with every edge (least squares in the
 /// edges' information, solved by Ceres), holding node 0 fixed to fix the map frame; loop edges sit
 /// behind a Cauchy loss, and one that still disagrees after a solve (loop_rejection_chi2) is
-/// rejected and the graph solved again without it, so one wrong loop cannot bend the map.
+/// rejected and the graph solved again without it, so one wrong loop cannot bend the map. Every
+/// node is expected to be joined to node 0 through edges (a part that is not floats freely).
 class PoseGraph {
  public:
   /// Adds a node at T_map_node (the initial guess); returns its index.
