@@ -153,6 +153,9 @@ second_session() {
     "$out/summary.json" 0 "$out"
 }
 
+# unshift OFFSET IN OUT: a trajectory with OFFSET seconds taken off its stamps.
+unshift() { awk -v d="$1" '/^#/ { print; next } NF { $1 = sprintf("%.6f", $1 - d); print }' "$2" > "$3"; }
+
 # node_share TRUTH ESTIMATE REFERENCE LATER_PART LABEL OFFSET: a node run's later part, evaluated
 # as measure does but from the trajectory alone (the node writes only the poses it published), its
 # and the reference's stamps first put back on the sequence's clock (tum_to_bag's shift OFFSET):
@@ -160,9 +163,8 @@ second_session() {
 node_share() {
   local truth="$1" later="$4" label="$5" offset="$6"
   local estimate="$label.unshifted.txt" reference="$label.reference.unshifted.txt"
-  unshift() { awk -v d="$offset" '/^#/ { print; next } NF { $1 = sprintf("%.6f", $1 - d); print }' "$1" > "$2"; }
-  [ -f "$2" ] && unshift "$2" "$estimate"
-  unshift "$3" "$reference"
+  [ -f "$2" ] && unshift "$offset" "$2" "$estimate"
+  unshift "$offset" "$3" "$reference"
   "$bin/sdf_tracker_evaluate" --groundtruth "$truth" --estimate "$estimate" --map-frame-from "$reference" \
     --errors "$label.errors.csv" > "$label.eval.txt" 2>&1 || true
   /usr/bin/python3 - "$later/depth.txt" "$estimate" "$label.errors.csv" <<'PY'
