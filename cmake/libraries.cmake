@@ -65,6 +65,7 @@ set(SDF_TRACKER_UNIT_TEST_SOURCES
   ${SDF_TRACKER_TEST_DIR}/unit/test_raycaster.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_relocalisation.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_sparse_map.cpp
+  ${SDF_TRACKER_TEST_DIR}/unit/test_synthetic_sensor.cpp
 )
 set(SDF_TRACKER_UNIT_TEST_LIBRARIES sdf_tracker_pipeline sdf_tracker_graph sdf_tracker_io sdf_tracker_sim sdf_tracker_eval)
 # Whole sequences through the pipeline, synthetic and (when ../shared/data has them) real: seconds

@@ -312,12 +312,8 @@ void Scene::add(const Scene& other, const Eigen::Isometry3d& T_W_other) {
 }
 
 Scene Scene::forMotion(Motion motion, HouseWalls walls) {
-  switch (motion) {
-    case Motion::kPlanar: return singleWall();
-    case Motion::kWalk:
-    case Motion::kCorridor: return house(walls);
-    default: return indoorRoom();
-  }
+  if (goesThroughTheHouse(motion)) return house(walls);
+  return motion == Motion::kPlanar ? singleWall() : indoorRoom();
 }
 
 Scene Scene::singleWall() {
@@ -368,6 +364,15 @@ DepthImage Scene::render(const PinholeCamera& camera, const Eigen::Isometry3d& T
                          uint32_t seed) const {
   DepthImage depth(camera.width, camera.height);
   const double max_incidence_cos = std::cos(noise.max_incidence_deg * M_PI / 180.0);
+  // The depth bias grows as r^2 / r_corner^2, r_corner the farthest corner pixel's distance to
+  // the principal point.
+  double corner_r2 = 0.0;
+  for (double u : {0.0, camera.width - 1.0}) {
+    for (double v : {0.0, camera.height - 1.0}) {
+      corner_r2 = std::max(corner_r2, (u - camera.cx) * (u - camera.cx) + (v - camera.cy) * (v - camera.cy));
+    }
+  }
+  const double bias_per_r2 = noise.depth_bias != 0.0 && corner_r2 > 0.0 ? noise.depth_bias / corner_r2 : 0.0;
 #pragma omp parallel for schedule(dynamic, 8)
   for (int v = 0; v < camera.height; ++v) {
     std::mt19937 rng(seed * 2654435761u + static_cast<uint32_t>(v));  // one stream per row: thread-count independent
@@ -383,6 +388,7 @@ DepthImage Scene::render(const PinholeCamera& camera, const Eigen::Isometry3d& T
       Eigen::Vector3d n_W;
       if (!intersect(T_W_C.translation(), dir_W, &t, &n_W)) continue;
       double z = t / ray_C.norm();  // depth along the optical axis
+      z *= 1.0 + bias_per_r2 * ((u - camera.cx) * (u - camera.cx) + (v - camera.cy) * (v - camera.cy));
       if (noise.enabled) {
         const double cos_incidence = std::fabs(n_W.dot(dir_W));
         const double noise_draw = gaussian(rng);
@@ -405,12 +411,24 @@ DepthImage Scene::render(const PinholeCamera& camera, const Eigen::Isometry3d& T
   return depth;
 }
 
-Motion parseMotion(const std::string& name) {
-  for (Motion m : {Motion::kDesk, Motion::kSlow, Motion::kFast, Motion::kPlanar, Motion::kLoop, Motion::kWalk,
-                   Motion::kCorridor}) {
-    if (toString(m) == name) return m;
+void checkDepthBias(double depth_bias, const std::string& what) {
+  // Written so that NaN fails the comparison.
+  if (!(std::abs(depth_bias) <= kMaxDepthBias)) {
+    std::ostringstream message;
+    message << what << ": the depth bias must be finite and in [" << -kMaxDepthBias << ", " << kMaxDepthBias
+            << "], got " << depth_bias;
+    throw std::invalid_argument(message.str());
   }
-  throw std::invalid_argument("unknown motion \"" + name + "\" (known: desk, slow, fast, planar, loop, walk, corridor)");
+}
+
+Motion parseMotion(const std::string& name) {
+  std::string known;
+  for (Motion m : {Motion::kDesk, Motion::kSlow, Motion::kFast, Motion::kPlanar, Motion::kLoop, Motion::kWalk,
+                   Motion::kCorridor, Motion::kRoundTrip}) {
+    if (toString(m) == name) return m;
+    known += (known.empty() ? "" : ", ") + toString(m);
+  }
+  throw std::invalid_argument("unknown motion \"" + name + "\" (known: " + known + ")");
 }
 
 std::string toString(Motion motion) {
@@ -422,24 +440,23 @@ std::string toString(Motion motion) {
     case Motion::kLoop: return "loop";
     case Motion::kWalk: return "walk";
     case Motion::kCorridor: return "corridor";
+    case Motion::kRoundTrip: return "round-trip";
   }
   return "unknown";
 }
 
+bool goesThroughTheHouse(Motion motion) {
+  return motion == Motion::kWalk || motion == Motion::kCorridor || motion == Motion::kRoundTrip;
+}
+
 namespace {
 
-/// The walk through the house: a Catmull-Rom curve through waypoints on the floor plan (x, z),
-/// sampled densely and parametrised by arc length.
+/// A walk through the house: a Catmull-Rom curve through waypoints on the floor plan (x, z),
+/// sampled densely and parametrised by arc length. Its ends are straight when the first three and
+/// the last three waypoints lie on a line.
 class WalkPath {
  public:
-  WalkPath() {
-    const std::vector<Eigen::Vector2d> waypoints = {
-        {1.0, 1.0},  {2.0, 1.0},  {2.0, -1.0}, {3.0, -2.5}, {1.5, -3.0}, {1.0, -1.8}, {2.0, -0.8},   // room 1
-        {2.2, 1.0},  {3.0, 1.2},  {3.0, 3.0},  {4.5, 4.5},  {2.0, 5.0},  {1.5, 3.5},  {3.0, 2.8},   // room 4
-        {3.2, 1.0},  {6.0, 1.0},  {6.0, -1.0}, {7.0, -2.5}, {5.0, -3.0}, {5.5, -1.2}, {6.0, 0.6},   // room 2
-        {7.5, 1.1},  {9.0, 1.0},  {9.0, 3.0},  {10.5, 4.5}, {7.5, 4.6},  {8.0, 3.0},  {9.0, 1.6},   // room 5
-        {10.0, 1.0}, {10.0, -1.0}, {11.0, -2.8}, {9.0, -3.0}, {9.6, -1.0}, {10.0, 1.0}, {7.0, 1.0},  // room 3
-        {4.0, 1.0},  {1.5, 1.0}};                                                                     // back
+  explicit WalkPath(const std::vector<Eigen::Vector2d>& waypoints) {
     constexpr int kSamplesPerSegment = 64;
     for (size_t i = 0; i + 1 < waypoints.size(); ++i) {
       const Eigen::Vector2d& p0 = waypoints[i == 0 ? 0 : i - 1];
@@ -476,22 +493,56 @@ class WalkPath {
   std::vector<double> arc_;
 };
 
+/// The walk: along the corridor and round every room.
+const WalkPath& houseWalk() {
+  static const WalkPath path({
+      {1.0, 1.0},  {2.0, 1.0},  {2.0, -1.0}, {3.0, -2.5}, {1.5, -3.0}, {1.0, -1.8}, {2.0, -0.8},   // room 1
+      {2.2, 1.0},  {3.0, 1.2},  {3.0, 3.0},  {4.5, 4.5},  {2.0, 5.0},  {1.5, 3.5},  {3.0, 2.8},   // room 4
+      {3.2, 1.0},  {6.0, 1.0},  {6.0, -1.0}, {7.0, -2.5}, {5.0, -3.0}, {5.5, -1.2}, {6.0, 0.6},   // room 2
+      {7.5, 1.1},  {9.0, 1.0},  {9.0, 3.0},  {10.5, 4.5}, {7.5, 4.6},  {8.0, 3.0},  {9.0, 1.6},   // room 5
+      {10.0, 1.0}, {10.0, -1.0}, {11.0, -2.8}, {9.0, -3.0}, {9.6, -1.0}, {10.0, 1.0}, {7.0, 1.0},  // room 3
+      {4.0, 1.0},  {1.5, 1.0}});                                                                    // back
+  return path;
+}
+
+/// The round trip: east down the corridor's middle, round room 5 (north, door at x = 9) and back
+/// out, west down the corridor, round room 1 (south, door at x = 2), and out onto the corridor
+/// where it started, straight along +x over its first and last metre. Every waypoint keeps 0.3 m
+/// or more from the walls, from the shelves on them and from the furniture's footprints.
+const WalkPath& roundTrip() {
+  static const WalkPath path({
+      {3.3, 1.0}, {4.5, 1.0}, {6.0, 1.0}, {7.6, 1.0},                                               // corridor east
+      {8.7, 1.3}, {9.1, 2.1}, {8.3, 2.8}, {7.4, 3.0}, {6.8, 3.6}, {7.4, 4.2}, {8.5, 4.4}, {9.4, 4.3},  // room 5
+      {10.2, 4.1}, {10.1, 3.3}, {9.4, 2.7}, {9.0, 1.8},
+      {8.0, 1.1}, {6.0, 1.0}, {4.0, 1.0},                                                           // corridor west
+      {2.9, 0.8}, {2.1, -0.1}, {2.6, -1.2}, {2.5, -2.5}, {2.3, -3.2}, {1.7, -2.4}, {0.8, -1.8},     // room 1
+      {1.3, -1.1}, {1.9, -0.6},
+      {1.9, 0.3}, {1.3, 0.7}, {0.95, 1.0}, {1.3, 1.35}, {2.0, 1.15}, {2.5, 1.0}, {2.9, 1.0}, {3.3, 1.0}});  // turning back
+  return path;
+}
+
 constexpr double kWalkSpeed_m_s = 0.5;
 
-Eigen::Isometry3d walkPose(double t_s) {
-  static const WalkPath path;
+/// Carrying the camera along `path` at kWalkSpeed_m_s at eye height, looking where it goes, the
+/// head swaying slowly and bobbing with the steps. With `settle`, the sway fades out over the
+/// path's last kSettle_m and the camera stops at its end looking along the path, as it started
+/// (the sway is zero at t = 0): a path that ends where it began ends in the pose it began in.
+Eigen::Isometry3d handHeldPose(const WalkPath& path, double t_s, bool settle) {
+  constexpr double kSettle_m = 1.5;
   const double s = kWalkSpeed_m_s * t_s;
   const Eigen::Vector2d here = path.at(s);
+  const double f = settle ? std::max(0.0, std::min(1.0, (path.length() - s) / kSettle_m)) : 1.0;
+  const double sway = f * f * (3.0 - 2.0 * f);  // fades out at rest
   // Looking where the path goes over the next and last 0.4 m smooths the turns at the waypoints;
   // a slow sway of the head sweeps the walls.
   Eigen::Vector2d heading = path.at(s + 0.4) - path.at(s - 0.4);
   if (heading.norm() < 1e-6) heading = Eigen::Vector2d(1.0, 0.0);
-  const double yaw = std::atan2(heading.x(), heading.y()) + 0.25 * std::sin(0.7 * t_s);
-  const double pitch_down = 0.25 + 0.08 * std::sin(0.45 * t_s);
-  const Eigen::Vector3d eye(here.x(), 0.02 * std::sin(2.0 * M_PI * 1.8 * t_s), here.y());
+  const double yaw = std::atan2(heading.x(), heading.y()) + sway * 0.25 * std::sin(0.7 * t_s);
+  const double pitch_down = 0.25 + sway * 0.08 * std::sin(0.45 * t_s);
+  const Eigen::Vector3d eye(here.x(), sway * 0.02 * std::sin(2.0 * M_PI * 1.8 * t_s), here.y());
   const Eigen::Vector3d forward(std::sin(yaw) * std::cos(pitch_down), std::sin(pitch_down),
                                 std::cos(yaw) * std::cos(pitch_down));
-  return lookAt(eye, eye + forward, 0.03 * std::sin(0.9 * t_s));
+  return lookAt(eye, eye + forward, sway * 0.03 * std::sin(0.9 * t_s));
 }
 
 /// The corridor drive: down the house's corridor (x from 0.8 to 10.4 m, 1 m from either wall),
@@ -525,7 +576,8 @@ Eigen::Isometry3d corridorPose(double t_s) {
 }  // namespace
 
 Eigen::Isometry3d cameraPose(Motion motion, double t_s, double duration_s) {
-  if (motion == Motion::kWalk) return walkPose(t_s);
+  if (motion == Motion::kWalk) return handHeldPose(houseWalk(), t_s, false);
+  if (motion == Motion::kRoundTrip) return handHeldPose(roundTrip(), t_s, true);
   if (motion == Motion::kCorridor) return corridorPose(t_s);
   if (motion == Motion::kPlanar) {
     // Facing the wall 2 m away, sliding sideways and up/down: nothing fixes x, y or the roll.
@@ -576,6 +628,7 @@ void writeSequence(const std::string& directory, const SequenceSpec& spec) {
     throw std::invalid_argument("a sequence needs frames > 0 and rate_hz > 0 (got " + std::to_string(spec.frames) +
                                 ", " + std::to_string(spec.rate_hz) + ")");
   }
+  checkDepthBias(spec.noise.depth_bias, "noise.depth_bias");
   const Scene scene = Scene::forMotion(spec.motion, spec.house_walls);
   const double duration = spec.frames / spec.rate_hz;
   std::vector<io::StampedPose> poses;
@@ -585,8 +638,9 @@ void writeSequence(const std::string& directory, const SequenceSpec& spec) {
   }
   std::ostringstream comment;
   comment << "synthetic depth (sdf_tracker), motion " << toString(spec.motion) << ", noise "
-          << (spec.noise.enabled ? "on" : "off") << ", seed " << spec.seed
-          << (spec.house_walls == HouseWalls::kBare ? ", bare walls" : "");
+          << (spec.noise.enabled ? "on" : "off");
+  if (spec.noise.depth_bias != 0.0) comment << ", depth bias " << spec.noise.depth_bias;
+  comment << ", seed " << spec.seed << (spec.house_walls == HouseWalls::kBare ? ", bare walls" : "");
   writeTumFolder(
       directory, comment.str(), poses, poses,
       [&](size_t i) { return scene.render(spec.camera, poses[i].T_W_C, spec.noise, spec.seed * 100003u + i); },

@@ -17,16 +17,22 @@ Renders an analytic indoor scene along a scripted camera path, in TUM layout
   --output DIR       folder to write (created)
   --motion NAME      desk (default) | slow | fast | planar | loop | walk (through a house, 0.5 m/s)
                      | corridor (a robot down the house's corridor and back at 0.5 m/s, its camera
-                     0.4 m high looking 50 degrees to the side)
-  --bare-walls       walk and corridor: bare walls, but for six pictures in the corridor (default: a picture
-                     or a shelf every metre of every wall); close to a bare wall the view holds one
-                     plane, which depth alone cannot place
+                     0.4 m high looking 50 degrees to the side) | round-trip (a walk at 0.5 m/s down
+                     the corridor, round two rooms and back to where it started, looking the same
+                     way: about 37 m, 75 s)
+  --bare-walls       walk, corridor and round-trip: bare walls, but for six pictures in the
+                     corridor (default: a picture or a shelf every metre of every wall); close to a
+                     bare wall the view holds one plane, which depth alone cannot place
   --frames N         number of frames (default 300, at 30 Hz)
   --seed N           noise seed (default 1)
   --size WxH         image size: 640x480 (default), 320x240 or 160x120 (freiburg1 intrinsics, scaled)
   --no-noise         exact depth, no Kinect-like noise, dropouts or quantisation
   --disparity-subpixels N   disparity quantisation steps per pixel (default 8; 0 = none)
   --noise-scale S    scale of the axial Gaussian noise (default 1)
+  --depth-bias B     a depth error fixed in the image, as an uncalibrated Kinect's: depth B times
+                     too long at the corners (B < 0: too short), growing with the square of the
+                     distance from the principal point; in [-0.1, 0.1], default 0; applies with
+                     --no-noise too
   --odometry         also write odometry.txt: the camera's poses as a robot's wheel odometry would
                      report them (each metre 2 % too long, the heading drifting 1 degree per metre,
                      noise), for sdf_tracker_offline --odometry
@@ -41,7 +47,7 @@ int run(int argc, char** argv) {
   using namespace sdf_tracker;
   const tools::CommandLine args(argc, argv,
                                 {"output", "motion", "frames", "seed", "size", "disparity-subpixels", "noise-scale",
-                                 "relocalisation-case"},
+                                 "depth-bias", "relocalisation-case"},
                                 {"no-noise", "bare-walls", "odometry", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
@@ -52,9 +58,10 @@ int run(int argc, char** argv) {
   spec.frames = args.getInt("frames", 300);
   spec.seed = static_cast<uint32_t>(args.getInt("seed", 1));
   if (args.has("bare-walls")) {
-    if (spec.motion != synthetic::Motion::kWalk && spec.motion != synthetic::Motion::kCorridor) {
-      throw std::invalid_argument("--bare-walls: only the walk and the corridor go through the house (got --motion " +
-                                  synthetic::toString(spec.motion) + ")");
+    if (!synthetic::goesThroughTheHouse(spec.motion)) {
+      throw std::invalid_argument(
+          "--bare-walls: only the walk, the corridor and the round trip go through the house (got --motion " +
+          synthetic::toString(spec.motion) + ")");
     }
     spec.house_walls = synthetic::HouseWalls::kBare;
   }
@@ -72,6 +79,10 @@ int run(int argc, char** argv) {
   spec.noise.enabled = !args.has("no-noise");
   spec.noise.disparity_subpixels = args.getInt("disparity-subpixels", spec.noise.disparity_subpixels);
   spec.noise.axial_noise_scale = args.getDouble("noise-scale", spec.noise.axial_noise_scale);
+  spec.noise.depth_bias = args.getDouble("depth-bias", spec.noise.depth_bias);
+  synthetic::checkDepthBias(spec.noise.depth_bias, "--depth-bias");
+  const std::string noise_words = std::string("noise ") + (spec.noise.enabled ? "on" : "off") +
+                                  (spec.noise.depth_bias != 0.0 ? ", depth bias " + args.get("depth-bias") : "");
   const std::string output = args.require("output");
   if (args.has("relocalisation-case")) {
     for (const char* option : {"motion", "frames", "bare-walls", "odometry"}) {
@@ -83,13 +94,12 @@ int run(int argc, char** argv) {
     const synthetic::RelocalisationCase c = synthetic::relocalisationCase(args.get("relocalisation-case"));
     synthetic::writeRelocalisationCase(output, c, spec.camera, spec.noise, spec.seed);
     std::cout << "wrote relocalisation case " << c.name << " (" << c.mapping.size() << " frames to map, "
-              << c.session.size() << " in the second session, noise " << (spec.noise.enabled ? "on" : "off")
-              << ") to " << output << "\n";
+              << c.session.size() << " in the second session, " << noise_words << ") to " << output << "\n";
     return 0;
   }
   synthetic::writeSequence(output, spec);
-  std::cout << "wrote " << spec.frames << " frames (" << synthetic::toString(spec.motion) << ", noise "
-            << (spec.noise.enabled ? "on" : "off") << ") to " << output << "\n";
+  std::cout << "wrote " << spec.frames << " frames (" << synthetic::toString(spec.motion) << ", " << noise_words
+            << ") to " << output << "\n";
   return 0;
 }
 

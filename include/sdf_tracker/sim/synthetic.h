@@ -29,6 +29,8 @@ struct Primitive {
 
 /// Kinect v1-like depth noise (Nguyen, Izadi and Lovell, 3DIMPVT 2012) and sensor limits.
 struct NoiseModel {
+  /// The random part (Gaussian noise, dropouts, quantisation) and the range and incidence limits;
+  /// not depth_bias, which applies either way.
   bool enabled = true;
   double max_range_m = 4.5;
   double max_incidence_deg = 78.0;  ///< more grazing surfaces return nothing
@@ -40,7 +42,20 @@ struct NoiseModel {
   int disparity_subpixels = 8;
   /// Scales the axial Gaussian noise (1 = the fitted model, 0 = none).
   double axial_noise_scale = 1.0;
+  /// A systematic depth error fixed in the image, as an uncalibrated Kinect has: the relative
+  /// error at the image's corners, growing with the square of the distance from the principal
+  /// point. Depth z becomes z * (1 + depth_bias * r^2 / r_corner^2), r the pixel's distance to
+  /// (cx, cy) and r_corner the largest distance from (cx, cy) to a corner pixel; 0 = none. It is
+  /// applied to the true depth, before the noise and the quantisation, whether `enabled` or not:
+  /// it is no random draw, the same in every frame.
+  double depth_bias = 0.0;
 };
+
+/// The largest depth_bias magnitude the sequences take: 10 % at the corners.
+constexpr double kMaxDepthBias = 0.1;
+/// Throws std::invalid_argument("<what>: ...", with the value) unless `depth_bias` is finite and
+/// in [-kMaxDepthBias, kMaxDepthBias].
+void checkDepthBias(double depth_bias, const std::string& what);
 
 enum class Motion;
 
@@ -61,7 +76,7 @@ class Scene {
   /// other, doors, furniture, and pictures on the corridor's walls; `walls` says what else the
   /// walls carry.
   static Scene house(HouseWalls walls = HouseWalls::kFurnished);
-  /// The scene a path is made for (`walls`: the house's, for the walk).
+  /// The scene a path is made for (`walls`: the house's, for the paths through it).
   static Scene forMotion(Motion motion, HouseWalls walls = HouseWalls::kFurnished);
 
   /// Two copies of the indoor room side by side, the second at secondRoom(), each closed:
@@ -105,12 +120,18 @@ enum class Motion {
   kCorridor,  ///< a robot driving at 0.5 m/s down the house's corridor and back, its camera 0.4 m
               ///< above the floor looking 50 degrees to the side: the floor and a wall, whose length
               ///< only the pictures, cabinets and doors on it place
+  kRoundTrip,  ///< a hand-held walk at 0.5 m/s, as the walk, down the corridor, round two rooms and
+               ///< back, ending at rest where it started and looking the same way: its last frames
+               ///< see what its first saw
 };
 Motion parseMotion(const std::string& name);  ///< throws std::invalid_argument
 std::string toString(Motion motion);
+/// Whether the path goes through the house (the walk, the corridor and the round trip).
+bool goesThroughTheHouse(Motion motion);
 
 /// Camera to world at time t [s] along a path. duration_s only sets the loop's period; the walk
-/// keeps its speed and its path (about 50 m) whatever the duration.
+/// and the round trip keep their speed and their paths (about 50 m and 37 m) whatever the
+/// duration, the round trip standing still at its end once it is done.
 Eigen::Isometry3d cameraPose(Motion motion, double t_s, double duration_s);
 
 struct SequenceSpec {
@@ -119,7 +140,7 @@ struct SequenceSpec {
   double rate_hz = 30.0;
   NoiseModel noise;
   uint32_t seed = 1;
-  HouseWalls house_walls = HouseWalls::kFurnished;  ///< what the house has on its walls (walk, corridor)
+  HouseWalls house_walls = HouseWalls::kFurnished;  ///< what the house has on its walls (goesThroughTheHouse)
   PinholeCamera camera = PinholeCamera::tumFreiburg1();
   double depth_factor = 5000.0;
   /// Also write odometry.txt: the camera's poses as a wheel odometry of this model reports them.
