@@ -19,16 +19,17 @@ target_include_directories(sdf_tracker_eigen SYSTEM INTERFACE ${EIGEN3_INCLUDE_D
 # The tracker: Eigen and OpenMP only.
 sdf_tracker_part(util SOURCES frame_memory memory se3 LINK sdf_tracker_eigen ${SDF_TRACKER_PARALLEL})
 sdf_tracker_part(camera SOURCES camera depth_image depth_undistortion sensor_model DEPENDS util)
-sdf_tracker_part(map SOURCES block_swap sparse_tsdf_map tsdf_map tsdf_volume DEPENDS util)
+sdf_tracker_part(map SOURCES block_swap map_merge sparse_tsdf_map tsdf_map tsdf_volume DEPENDS util)
 sdf_tracker_part(fusion SOURCES integrator DEPENDS camera map)
 sdf_tracker_part(tracking SOURCES motion_model tracker DEPENDS camera map)
 sdf_tracker_part(surface SOURCES chunked_mesh raycaster surface DEPENDS camera map)
 # Finding the camera again: the places the map was built from, and the search among them.
 sdf_tracker_part(places SOURCES place_descriptor place_memory DEPENDS camera)
 sdf_tracker_part(relocalisation SOURCES coarse_field relocaliser view_agreement DEPENDS tracking surface places)
-sdf_tracker_part(pipeline SOURCES parameters pipeline DEPENDS fusion tracking surface relocalisation)
 # Loop closure: the pose graph over submaps, solved by Ceres.
-sdf_tracker_part(graph SOURCES pose_graph DEPENDS util LINK Ceres::ceres)
+sdf_tracker_part(graph SOURCES background_solver pose_graph DEPENDS util LINK Ceres::ceres)
+sdf_tracker_part(pipeline SOURCES loop_closure parameters pipeline submaps
+  DEPENDS fusion tracking surface relocalisation graph)
 
 # Around the tracker: files (OpenCV for PNG only), the synthetic scenes, trajectory errors.
 sdf_tracker_part(io SOURCES depth_png files map_file mesh_file sdfmap_file trajectory_file tum_sequence vti_file
@@ -57,6 +58,7 @@ set(SDF_TRACKER_UNIT_TEST_SOURCES
   ${SDF_TRACKER_TEST_DIR}/unit/test_integrator.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_tracker.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_io.cpp
+  ${SDF_TRACKER_TEST_DIR}/unit/test_loop_closure.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_tum_sequence.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_evaluation.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_parameters.cpp
@@ -65,6 +67,7 @@ set(SDF_TRACKER_UNIT_TEST_SOURCES
   ${SDF_TRACKER_TEST_DIR}/unit/test_raycaster.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_relocalisation.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_sparse_map.cpp
+  ${SDF_TRACKER_TEST_DIR}/unit/test_submaps.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_synthetic_sensor.cpp
 )
 set(SDF_TRACKER_UNIT_TEST_LIBRARIES sdf_tracker_pipeline sdf_tracker_graph sdf_tracker_io sdf_tracker_sim sdf_tracker_eval)

@@ -72,6 +72,14 @@ int PoseGraph::addNode(const Eigen::Isometry3d& T_map_node) {
   return static_cast<int>(poses_.size()) - 1;
 }
 
+void PoseGraph::setPose(int node, const Eigen::Isometry3d& T_map_node) {
+  if (node < 0 || node >= static_cast<int>(poses_.size())) {
+    throw std::out_of_range("pose graph: no node " + std::to_string(node) + " (there are " +
+                            std::to_string(poses_.size()) + ")");
+  }
+  poses_[node] = T_map_node;
+}
+
 void PoseGraph::addEdge(const PoseEdge& edge) {
   const int nodes = static_cast<int>(poses_.size());
   auto refuse = [&edge](const std::string& why) { throw std::invalid_argument(describeEdge(edge) + ": " + why); };

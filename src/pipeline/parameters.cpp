@@ -345,6 +345,35 @@ std::vector<ParameterSpec> buildTable() {
                             "saw free space, or seen through a mapped surface",
                             closed(0.0, 1.0), same(0.05), kLive, kAll,
                             [](auto& s) -> auto& { return s.pipeline.relocaliser.max_contradiction; }));
+  t.push_back(bound<double>("SubmapSize", "m",
+                            "sparse map: the map as submaps along the path (what loop closure moves), a new one once "
+                            "the camera is this far from where the active one started; 0 one map",
+                            closed(0.0, 1e4), same(0.0), kAtStart, kAll,
+                            [](auto& s) -> auto& { return s.pipeline.submaps.max_distance_m; }));
+  t.push_back(bound<double>("SubmapTurn", "deg",
+                            "with SubmapSize: a new submap also once the camera has turned this much from the way "
+                            "it looked when the active one started",
+                            closed(0.1, 180.0), same(60.0), kAtStart, kAll,
+                            [](auto& s) -> auto& { return s.pipeline.submaps.max_rotation_deg; }));
+  t.push_back(bound<int>("SubmapHandoverFrames", "frames",
+                         "with SubmapSize: a new submap's first frames are tracked against the one before and fused "
+                         "into both",
+                         closed(1, 1000), same(10), kAtStart, kAll,
+                         [](auto& s) -> auto& { return s.pipeline.submaps.handover_frames; }));
+  t.push_back(bound<bool>("LoopClosure", "",
+                          "with SubmapSize: find the view again in submaps that are not recent (the place memory, "
+                          "verified and confirmed as a relocalisation is) and place every submap anew by a pose graph",
+                          {}, same(false), kAtStart, kAll,
+                          [](auto& s) -> auto& { return s.pipeline.loops.enabled; }));
+  t.push_back(bound<double>("LoopSearchRadius", "m",
+                            "with LoopClosure: keyframes of older submaps this close to the camera, where the graph "
+                            "places them, are loop candidates (the drift since must be within it)",
+                            closed(0.05, 100.0), same(2.0), kAtStart, kAll,
+                            [](auto& s) -> auto& { return s.pipeline.loops.search_radius_m; }));
+  t.push_back(bound<int>("LoopCheckFrames", "frames",
+                         "with LoopClosure: a tracked frame is looked at for a loop every this many frames",
+                         closed(1, 100000), same(15), kAtStart, kAll,
+                         [](auto& s) -> auto& { return s.pipeline.loops.check_interval_frames; }));
   for (int axis = 0; axis < 3; ++axis) {
     t.push_back(bound<double>(kInitialCameraParameters[axis], "",
                               std::string("dense grid: first camera's place along ") + char('x' + axis) +
@@ -411,6 +440,17 @@ std::vector<std::string> Settings::validate() const {
     v.require(false, "MaxMemoryMB=" + text(p.max_map_memory_mb) +
                          " applies to MapType=sparse only (the dense grid's memory is fixed by GridSizeX/Y/Z)");
   }
+  if (p.submaps.enabled() && p.volume.type == MapType::kDense) {
+    v.require(false, "SubmapSize=" + text(p.submaps.max_distance_m) + " applies to MapType=sparse only");
+  }
+  if (p.submaps.enabled() && p.max_map_memory_mb > 0.0) {
+    v.require(false, "SubmapSize=" + text(p.submaps.max_distance_m) + " and MaxMemoryMB=" + text(p.max_map_memory_mb) +
+                         " cannot be used together yet: swapping keeps to one map (set one of them to 0)");
+  }
+  if (p.loops.enabled && !p.submaps.enabled()) {
+    v.require(false, "LoopClosure=true needs SubmapSize > 0: loops move submaps (got SubmapSize=" +
+                         text(p.submaps.max_distance_m) + ")");
+  }
   if (p.volume.compact_voxels && p.integrator.max_weight > VoxelCodec<CompactVoxel>::kMaxWeight) {
     v.require(false, "MaxWeight must be at most " + text(VoxelCodec<CompactVoxel>::kMaxWeight) +
                          " with CompactVoxels=true (got " + text(p.integrator.max_weight) + ")");
@@ -447,6 +487,21 @@ std::vector<std::string> Settings::withoutEffect(const std::vector<std::string>&
   if (swap_directory_given && !(pipeline.max_map_memory_mb > 0.0)) {
     notes.push_back("SwapDirectory=" + pipeline.swap_directory + " has no effect without MaxMemoryMB, the bound "
                     "beyond which blocks go to a swap file there; set MaxMemoryMB too");
+  }
+  if (!pipeline.submaps.enabled()) {
+    for (const char* name : {"SubmapTurn", "SubmapHandoverFrames"}) {
+      if (std::find(given.begin(), given.end(), name) == given.end()) continue;
+      notes.push_back(std::string(name) + "=" + toText(findParameter(name)->get(*this)) +
+                      " has no effect without SubmapSize, the distance at which a new submap starts; set "
+                      "SubmapSize too");
+    }
+  }
+  if (!pipeline.loops.enabled) {
+    for (const char* name : {"LoopSearchRadius", "LoopCheckFrames"}) {
+      if (std::find(given.begin(), given.end(), name) == given.end()) continue;
+      notes.push_back(std::string(name) + "=" + toText(findParameter(name)->get(*this)) +
+                      " has no effect without LoopClosure=true; set it too");
+    }
   }
   return notes;
 }

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "sdf_tracker/map/map_merge.h"
 #include "sdf_tracker/map/sparse_tsdf_map.h"
 #include "sdf_tracker/map/tsdf_volume.h"
 #include "sdf_tracker/util/se3.h"
@@ -78,6 +79,13 @@ std::vector<std::string> PipelineConfig::validate() const {
   v.merge("raycast.", raycast.validate());
   v.merge("places.", places.validate());
   v.merge("relocaliser.", relocaliser.validate());
+  v.merge("submaps.", submaps.validate());
+  v.merge("loops.", loops.validate());
+  v.require(!loops.enabled || submaps.enabled(), "loop closure needs submaps (submaps.max_distance_m is 0)");
+  if (submaps.enabled()) {
+    v.require(volume.type == MapType::kSparse, "submaps need the sparse map (volume.type is dense)");
+    v.require(max_map_memory_mb == 0.0, "submaps cannot be used with max_map_memory_mb > 0 yet");
+  }
   v.requireNonNegative("min_depth_m", min_depth_m);
   v.require(max_depth_m > min_depth_m, "max_depth_m must be > min_depth_m (got " + std::to_string(max_depth_m) +
                                            " <= " + std::to_string(min_depth_m) + ")");
@@ -118,9 +126,30 @@ SdfPipeline::SdfPipeline(const PipelineConfig& config)
   tracker_ = std::make_unique<Tracker>(config.tracker);
   places_ = std::make_unique<PlaceMemory>(config.places);
   relocaliser_ = std::make_unique<Relocaliser>(config.relocaliser, config.tracker);
+  if (config.loops.enabled) {
+    loop_detector_ = std::make_unique<LoopDetector>(config.loops, config.relocaliser, config.tracker, config.places);
+    graph_solver_ = std::make_unique<BackgroundGraphSolver>();
+  }
+}
+
+void SdfPipeline::clearSubmaps() {
+  endHandover();
+  search_map_.reset();
+  search_places_.reset();
+  closed_submaps_.clear();
+  active_ = SubmapPlace();
+  keyframe_submaps_.clear();
+  if (graph_solver_) graph_solver_->cancel();
+  graph_ = PoseGraph();
+  if (loop_detector_) loop_detector_->reset();
+  loop_edges_.clear();
+  solved_edges_ = 0;
+  rejected_edges_.clear();
+  loops_closed_ = loops_rejected_ = 0;
 }
 
 void SdfPipeline::clearMap() {
+  clearSubmaps();
   map_->clear();
   if (budget_) budget_->clear();
   places_->clear();
@@ -141,10 +170,15 @@ void SdfPipeline::reset() {
 void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemory> places) {
   if (!map) throw std::invalid_argument("setMap: no map");
   if (map->observesNothing()) throw std::invalid_argument("the map holds no observed voxel: nothing to track against");
+  if (config_.submaps.enabled() && map->type() != MapType::kSparse) {
+    throw std::invalid_argument("submaps need a sparse map; this one is a " + map->config().describe());
+  }
+  clearSubmaps();
   map_ = std::move(map);
   config_.volume = map_->config();
   budget_ = makeBudget(config_, map_->type());
   places_ = places ? std::move(places) : std::make_unique<PlaceMemory>(config_.places);
+  keyframe_submaps_.assign(places_->keyframes().size(), 0);
   T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
   map_initialised_ = true;
   consecutive_failures_ = 0;
@@ -261,6 +295,16 @@ void SdfPipeline::evictAwayFrom(const Eigen::Isometry3d& T_W_C, const PinholeCam
 }
 
 std::unique_ptr<TsdfMap> SdfPipeline::copyWholeMap() const {
+  if (!closed_submaps_.empty()) {
+    // Submaps are sparse maps without a budget (PipelineConfig::validate), each where the graph
+    // places it.
+    std::vector<PlacedMap> parts;
+    for (const Submap& submap : closed_submaps_) {
+      parts.push_back({&static_cast<const SparseTsdfMap&>(*submap.map), submap.place.T_map_W});
+    }
+    parts.push_back({&static_cast<const SparseTsdfMap&>(*map_), active_.T_map_W});
+    return std::make_unique<SparseTsdfMap>(mergeMaps(parts));
+  }
   if (!budget_ || budget_->swap().size() == 0) return map_->clone();
   return std::make_unique<SparseTsdfMap>(budget_->whole(static_cast<const SparseTsdfMap&>(*map_)));
 }
@@ -271,8 +315,12 @@ bool SdfPipeline::search(const DepthImage& filtered, const PinholeCamera& camera
   r.searched = true;
   const std::string tracking_failure = report->track.message;
   if (!relocaliser_->searching()) {
+    // A map of several submaps is searched whole: the camera may be in any of them.
+    endHandover();
+    search_map_ = closed_submaps_.empty() ? nullptr : copyWholeMap();
+    search_places_ = closed_submaps_.empty() ? nullptr : placesInMapFrame();
     try {
-      relocaliser_->begin(*map_);
+      relocaliser_->begin(searchMap());
     } catch (const std::invalid_argument& e) {
       pose_unknown_ = false;  // a map without a surface: the next frame is tracked from the held pose
       r.message = std::string("no search: ") + e.what();
@@ -285,9 +333,10 @@ bool SdfPipeline::search(const DepthImage& filtered, const PinholeCamera& camera
     // A pose the user gave first, then the one held (the last known, or the map's start pose).
     search_guesses_.clear();
     if (pose_unknown_ && search_guess_) search_guesses_.push_back(*search_guess_);
-    search_guesses_.push_back(T_W_C_);
+    search_guesses_.push_back(mapPose());  // in the merged submaps' frame, the map's
   }
-  const Relocaliser::Step step = relocaliser_->step(filtered, camera, *map_, *places_, search_guesses_);
+  const Relocaliser::Step step = relocaliser_->step(filtered, camera, searchMap(),
+                                                        search_places_ ? *search_places_ : *places_, search_guesses_);
   r.outcome = step.outcome;
   r.candidates_tried = step.candidates_tried;
   r.frames_spent = relocaliser_->framesSpent();
@@ -317,6 +366,160 @@ bool SdfPipeline::search(const DepthImage& filtered, const PinholeCamera& camera
   report->track.pose_estimated = false;
   report->track.message = s.str();
   return false;
+}
+
+size_t SdfPipeline::mapMemoryBytes() const {
+  size_t bytes = map_->memoryBytes() + (search_map_ ? search_map_->memoryBytes() : 0);
+  for (const Submap& submap : closed_submaps_) bytes += submap.map->memoryBytes();
+  return bytes;
+}
+
+void SdfPipeline::startSubmap(bool after_search) {
+  if (graph_.poses().empty()) graph_.addNode(active_.T_map_anchor());  // the first submap's node
+  closed_submaps_.push_back(Submap{std::move(map_), active_});
+  const SubmapPlace& closed = closed_submaps_.back().place;
+  map_ = makeMap(closed_submaps_.back().map->config());
+  active_ = SubmapPlace();
+  active_.node = closed.node + 1;
+  active_.T_W_anchor = T_W_C_;
+  active_.path_m = closed.path_m + (closed.T_W_anchor.inverse() * T_W_C_).translation().norm();
+  if (after_search) {
+    // Found in the merged submaps: the pose is in the map frame, and the search's fit joins the
+    // new submap to the one nearest it.
+    const auto nearest = std::min_element(closed_submaps_.begin(), closed_submaps_.end(), [&](const Submap& a, const Submap& b) {
+      return (a.place.T_map_anchor().translation() - T_W_C_.translation()).norm() <
+             (b.place.T_map_anchor().translation() - T_W_C_.translation()).norm();
+    });
+    graph_.addNode(active_.T_map_anchor());
+    graph_.addEdge(PoseEdge{nearest->place.node, active_.node, nearest->place.T_map_anchor().inverse() * T_W_C_,
+                            loopEdgeInformation(config_.loops), PoseEdgeKind::kLoop});
+  } else {
+    // The tracker goes on in the same frame: the odometry between the two anchors.
+    active_.T_map_W = closed.T_map_W;
+    graph_.addNode(active_.T_map_anchor());
+    const Eigen::Isometry3d motion = closed.T_W_anchor.inverse() * active_.T_W_anchor;
+    graph_.addEdge(PoseEdge{closed.node, active_.node, motion, odometryEdgeInformation(config_.loops, motion),
+                            PoseEdgeKind::kOdometry});
+  }
+  handover_fuses_previous_ = !after_search;
+  handover_map_ = after_search ? search_map_.get() : closed_submaps_.back().map.get();
+  handover_frames_left_ = handover_map_ ? config_.submaps.handover_frames : 0;
+  if (loop_detector_) loop_detector_->startedSubmap();
+}
+
+const SubmapPlace& SdfPipeline::submapPlace(int node) const {
+  if (node == active_.node) return active_;
+  if (node < 0 || node >= static_cast<int>(closed_submaps_.size())) {
+    throw std::out_of_range("no submap " + std::to_string(node) + " (there are " + std::to_string(submapCount()) + ")");
+  }
+  return closed_submaps_[node].place;
+}
+
+std::unique_ptr<PlaceMemory> SdfPipeline::placesInMapFrame() const {
+  auto moved = std::make_unique<PlaceMemory>(places_->config());
+  const std::vector<Keyframe>& keyframes = places_->keyframes();
+  for (size_t k = 0; k < keyframes.size(); ++k) {
+    Keyframe keyframe = keyframes[k];
+    keyframe.T_W_C = submapPlace(keyframe_submaps_[k]).T_map_W * keyframe.T_W_C;
+    moved->add(std::move(keyframe));
+  }
+  return moved;
+}
+
+void SdfPipeline::closeLoops(const DepthImage& filtered, const PinholeCamera& camera, FrameReport* report) {
+  LoopReport& r = report->loop;
+  const auto start = std::chrono::steady_clock::now();
+  const LoopDetector::Step step =
+      loop_detector_->step(filtered, camera, T_W_C_, active_, closed_submaps_, *places_, keyframe_submaps_);
+  r.search_ms = millisecondsSince(start);
+  r.searched = step.searched;
+  r.submap = step.submap;
+  r.message = step.message;
+  if (!step.match) return;
+  // Where the active submap's anchor is in the old one's, by the camera seen from both.
+  const SubmapPlace& old = closed_submaps_[step.match->submap].place;
+  const Eigen::Isometry3d T_old_active =
+      old.T_W_anchor.inverse() * step.match->T_S_C * T_W_C_.inverse() * active_.T_W_anchor;
+  loop_edges_.push_back(graph_.edges().size());
+  graph_.addEdge(PoseEdge{old.node, active_.node, T_old_active, loopEdgeInformation(config_.loops), PoseEdgeKind::kLoop});
+  loop_detector_->joined(old.node);
+  graph_solver_->solve(graph_);
+  r.found = true;
+}
+
+void SdfPipeline::applyGraphSolution(const BackgroundGraphSolver::Result& result, LoopReport* report) {
+  const PoseGraphSolution& solution = result.solution;
+  const size_t solved_edges = result.graph.edges().size();
+  int kept = 0, kept_new = 0, rejected_new = 0;
+  for (size_t edge : loop_edges_) {
+    if (edge >= solved_edges) continue;
+    const bool wrong =
+        std::find(solution.rejected_loops.begin(), solution.rejected_loops.end(), static_cast<int>(edge)) !=
+        solution.rejected_loops.end();
+    kept += !wrong;
+    if (edge >= solved_edges_) (wrong ? rejected_new : kept_new) += 1;
+  }
+  solved_edges_ = solved_edges;
+  rejected_edges_ = solution.rejected_loops;
+  loops_closed_ = kept;
+  loops_rejected_ += rejected_new;
+  report->solved = true;
+  report->closed = kept_new;
+  report->rejected = rejected_new;
+  report->optimise_ms = result.solve_ms;
+
+  const Eigen::Isometry3d active_before = active_.T_map_anchor();
+  // Node 0 is held where it is: its frame stays the map's. The submaps started after the graph
+  // was handed over move as the newest it holds moved.
+  const int solved_nodes = static_cast<int>(solution.poses.size());
+  Eigen::Isometry3d newest_moved = Eigen::Isometry3d::Identity();
+  for (int node = 1; node < solved_nodes; ++node) {
+    SubmapPlace& place = placeOf(node);
+    const Eigen::Isometry3d before = place.T_map_W;
+    place.T_map_W = solution.poses[node] * place.T_W_anchor.inverse();
+    if (node == solved_nodes - 1) newest_moved = place.T_map_W * before.inverse();
+  }
+  for (int node = std::max(solved_nodes, 1); node < static_cast<int>(submapCount()); ++node) {
+    SubmapPlace& place = placeOf(node);
+    place.T_map_W = newest_moved * place.T_map_W;
+  }
+  // The next solve starts from here.
+  for (int node = 0; node < static_cast<int>(graph_.poses().size()); ++node) {
+    graph_.setPose(node, placeOf(node).T_map_anchor());
+  }
+  const Eigen::Isometry3d moved = active_before.inverse() * active_.T_map_anchor();
+  report->correction_m = moved.translation().norm();
+  report->correction_deg = rotationAngle(moved) * 180.0 / M_PI;
+}
+
+std::vector<SdfPipeline::Loop> SdfPipeline::loops() const {
+  std::vector<Loop> loops;
+  for (size_t edge : loop_edges_) {
+    const bool rejected = std::find(rejected_edges_.begin(), rejected_edges_.end(), static_cast<int>(edge)) !=
+                          rejected_edges_.end();
+    loops.push_back({graph_.edges()[edge], edge < solved_edges_ && !rejected});
+  }
+  return loops;
+}
+
+LoopReport SdfPipeline::finishLoopClosure() {
+  LoopReport report;
+  if (!graph_solver_) return report;
+  if (std::optional<BackgroundGraphSolver::Result> result = graph_solver_->finish()) {
+    applyGraphSolution(*result, &report);
+  }
+  return report;
+}
+
+void SdfPipeline::endHandover() {
+  handover_map_ = nullptr;
+  handover_frames_left_ = 0;
+  handover_fuses_previous_ = false;
+  dropSearchMap();
+}
+
+void SdfPipeline::dropSearchMap() {
+  if (search_map_ && handover_map_ != search_map_.get() && !relocaliser_->searching()) search_map_.reset();
 }
 
 FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s,
@@ -367,6 +570,7 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     report.track.covariance = Eigen::Matrix<double, 6, 6>::Identity() *
                               std::pow(kSurfaceResolution_voxels * map_->voxelSize(), 2);
     report.initialised_map = true;
+    active_.T_W_anchor = T_W_C_;
   } else if (!given_T_W_C && pose_unknown_) {
     // The pose is not known at all (a loaded map, relocalise()): only a confirmed candidate
     // tells where the camera is.
@@ -397,10 +601,11 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     } else if (!given_T_W_C) {
       prior.T_W_C_unconstrained = T_W_C_ * expSe3(kUnobservedMotionKept * logSe3(T_W_C_.inverse() * predicted));
     }
-    report.track = tracker_->track(filtered, ideal_camera, *map_, predicted, prior);
+    report.tracked_in_previous_submap = handover_map_ != nullptr;
+    report.track = tracker_->track(filtered, ideal_camera, trackingMap(), predicted, prior);
     if (!given_T_W_C && !report.track.tracked() && !predicted.isApprox(T_W_C_)) {
       // The prediction may have led astray (the camera stopped or turned): try from the last pose.
-      TrackResult from_last = tracker_->track(filtered, ideal_camera, *map_, T_W_C_, prior);
+      TrackResult from_last = tracker_->track(filtered, ideal_camera, trackingMap(), T_W_C_, prior);
       if (from_last.tracked()) report.track = std::move(from_last);
     }
     report.tracking_ms = millisecondsSince(start);
@@ -429,6 +634,7 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
       relocaliser_->cancel();
     } else if (report.track.tracked() && brief_loss) {
       relocaliser_->cancel();  // back from the held pose: the search, if any, is over
+      dropSearchMap();
     } else if (config_.relocalise) {
       // Not from the prediction, nor from the held pose: search the whole map.
       found = search(filtered, ideal_camera, &report);
@@ -450,15 +656,47 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
   tracked_interval_s_ = timestamp_s - held_pose_timestamp_s_;
   held_pose_timestamp_s_ = timestamp_s;
   T_odom_C_held_ = T_odom_C;
-  if (config_.relocalise) places_->offer(filtered, T_W_C_);
+
+  if (config_.submaps.enabled() && !report.initialised_map) {
+    // Found by a search in the merged submaps: the camera may be anywhere in them, and the
+    // active submap need not hold its view.
+    const bool found_in_merged = report.relocalisation.outcome == Relocaliser::Outcome::kAccepted && search_map_;
+    if (found_in_merged ||
+        (handover_frames_left_ == 0 && leavesSubmap(config_.submaps, active_.T_W_anchor, T_W_C_))) {
+      startSubmap(found_in_merged);
+      report.started_submap = true;
+    }
+  }
+  report.submap = active_.node;
+  // The place memory serves the search after a loss and the loop detector.
+  if ((config_.relocalise || loop_detector_) && places_->offer(filtered, T_W_C_)) {
+    keyframe_submaps_.push_back(active_.node);
+  }
+  if (graph_solver_) {
+    if (std::optional<BackgroundGraphSolver::Result> solved = graph_solver_->poll()) {
+      applyGraphSolution(*solved, &report.loop);
+    }
+  }
+  if (loop_detector_ && !given_T_W_C && !report.initialised_map && !report.started_submap &&
+      handover_frames_left_ == 0 && report.relocalisation.outcome != Relocaliser::Outcome::kAccepted) {
+    closeLoops(filtered, ideal_camera, &report);
+  }
 
   const Eigen::Isometry3d motion = T_W_C_last_fused_.inverse() * T_W_C_;
   const double change = std::hypot(motion.translation().norm(), rotationAngle(motion));
-  if (report.initialised_map || change >= config_.min_pose_change_to_fuse) {
+  if (report.initialised_map || report.started_submap || change >= config_.min_pose_change_to_fuse) {
     const auto start = std::chrono::steady_clock::now();
     // Fusion must find every block of its view in memory: a swapped one would be made anew.
     restoreNear(T_W_C_, ideal_camera, furthest_m, &report);
     integrator_->integrate(filtered, ideal_camera, T_W_C_, map_.get());
+    ++active_.frames_fused;
+    if (handover_frames_left_ > 0) {
+      if (handover_fuses_previous_) {
+        integrator_->integrate(filtered, ideal_camera, T_W_C_, closed_submaps_.back().map.get());
+        ++closed_submaps_.back().place.frames_fused;
+      }
+      if (--handover_frames_left_ == 0) endHandover();
+    }
     evictAwayFrom(T_W_C_, ideal_camera, furthest_m, &report);
     report.fusion_ms = millisecondsSince(start);
     report.fused = true;

@@ -196,7 +196,8 @@ int run(int argc, char** argv) {
   }
   const std::vector<std::string> summaries = {"summary.txt", "summary.json"};
   st::tools::OutputFolder output(output_dir, {"trajectory.txt", "frames.csv", "mesh.ply", "cloud.ply", "sdf_volume.vti",
-                                              "map.sdfmap", "triangles.obj", "trajectory.png", "summary.txt", "summary.json"});
+                                              "map.sdfmap", "triangles.obj", "trajectory.png", "summary.txt", "summary.json",
+                                              "trajectory_online.txt", "loops.csv"});
   const st::PinholeCamera& camera = sequence.camera();
   std::cout << "sequence " << sequence_dir << ": " << sequence.size() << " frames, " << camera.width << "x"
             << camera.height << ", fx " << camera.fx << " fy " << camera.fy << " cx " << camera.cx << " cy "
@@ -241,7 +242,12 @@ int run(int argc, char** argv) {
   std::ostringstream frames_csv;
   frames_csv << "timestamp,status,iterations,rms_residual_m,valid_points,overlap,inverse_condition,constrained_rank,"
                 "tracking_ms,fusion_ms,fused,map_mb,message\n";
+  // As published at each frame (in the map frame as the pose graph had it then), and each pose in
+  // its submap's frame, which the final graph places (-1: in a map cleared since).
   std::vector<st::io::StampedPose> trajectory;
+  std::vector<std::pair<int, Eigen::Isometry3d>> poses_in_submaps;
+  std::vector<double> anchor_stamps;  // of the frame that started each submap, for loops.csv
+  std::vector<double> loop_search_ms, optimise_ms;  // frames that searched for a loop; graph solves
   std::vector<double> frame_ms, tracking_ms, fusion_ms, raycast_ms;
   size_t failed = 0, degenerate = 0;
   size_t tracked_in_map = 0;  // frames tracked against a map (not the one that started it)
@@ -272,7 +278,7 @@ int run(int argc, char** argv) {
       std::replace(message.begin(), message.end(), ',', ';');
       frames_csv << std::fixed << std::setprecision(6) << sequence.timestamp(i) << ','
                  << st::toString(st::TrackStatus::kBadInput) << ",,0,0,0,0,0,0,0,0," << std::setprecision(3)
-                 << pipeline.map().memoryBytes() / 1048576.0 << ',' << message << '\n';
+                 << pipeline.mapMemoryBytes() / 1048576.0 << ',' << message << '\n';
       progress.update(i + 1);
       continue;
     }
@@ -298,7 +304,29 @@ int run(int argc, char** argv) {
     if (t.tracked() && !report.initialised_map) ++tracked_in_map;
     // Estimates only (a held pose is none; frames.csv lists every frame): with --fuse-ground-truth,
     // where the tracker took the frame, not the fused pose.
-    if (t.tracked()) trajectory.push_back({sequence.timestamp(i), true_T_W_C.empty() ? pipeline.pose() : t.T_W_C});
+    if (report.reset) {
+      for (auto& pose : poses_in_submaps) pose.first = -1;
+    }
+    if (report.initialised_map) anchor_stamps.clear();
+    if (report.initialised_map || report.started_submap) anchor_stamps.push_back(sequence.timestamp(i));
+    if (t.tracked()) {
+      const Eigen::Isometry3d T_W_C = true_T_W_C.empty() ? pipeline.pose() : t.T_W_C;
+      trajectory.push_back({sequence.timestamp(i), pipeline.submapPlace(report.submap).T_map_W * T_W_C});
+      poses_in_submaps.emplace_back(report.submap, T_W_C);
+    }
+    if (report.loop.searched) loop_search_ms.push_back(report.loop.search_ms);
+    if (report.loop.found && !args.has("quiet")) {
+      std::cout << "\nframe " << i << ": loop found from submap " << report.submap << " to submap "
+                << report.loop.submap << "\n";
+    }
+    if (report.loop.solved) {
+      optimise_ms.push_back(report.loop.optimise_ms);
+      if (!args.has("quiet")) {
+        std::cout << "\nframe " << i << ": pose graph solved, " << report.loop.closed << " loop(s) closed, "
+                  << report.loop.rejected << " rejected; the active submap moved " << std::setprecision(3)
+                  << report.loop.correction_m * 100.0 << " cm, " << report.loop.correction_deg << " deg\n";
+      }
+    }
     if (!true_T_W_C.empty() && !report.initialised_map && t.tracked()) {
       const Eigen::Vector3d error_m = t.T_W_C.translation() - true_T_W_C[i]->translation();
       single_frame_errors_m.push_back(error_m.norm());
@@ -333,12 +361,39 @@ int run(int argc, char** argv) {
                << t.valid_points << ',' << std::setprecision(3) << t.overlap << ',' << std::setprecision(6)
                << t.inverse_condition << ',' << t.constrained_rank
                << ',' << std::setprecision(3) << report.tracking_ms << ',' << report.fusion_ms << ','
-               << (report.fused ? 1 : 0) << ',' << pipeline.map().memoryBytes() / 1048576.0 << ',' << message << '\n';
+               << (report.fused ? 1 : 0) << ',' << pipeline.mapMemoryBytes() / 1048576.0 << ',' << message << '\n';
     progress.update(i + 1);
   }
   progress.finish();
   const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
+  if (pipeline.config().loops.enabled) {
+    // trajectory.txt is the final one: every pose where the optimised graph places its submap,
+    // once the last solve has landed.
+    const st::LoopReport last = pipeline.finishLoopClosure();
+    if (last.solved) optimise_ms.push_back(last.optimise_ms);
+    st::io::writeTrajectory(output.path("trajectory_online.txt"), trajectory);
+    // Each loop as the submaps' anchors it joins (the frames that started them), to hold against
+    // a ground truth.
+    std::ostringstream loops_csv;
+    loops_csv << "from_submap,to_submap,from_anchor_time,to_anchor_time,tx,ty,tz,qx,qy,qz,qw,kept\n" << std::fixed;
+    for (const st::SdfPipeline::Loop& loop : pipeline.loops()) {
+      const st::PoseEdge& e = loop.edge;
+      const Eigen::Quaterniond q(e.T_from_to.rotation());
+      const Eigen::Vector3d t = e.T_from_to.translation();
+      auto stamp = [&anchor_stamps](int node) {
+        return node < static_cast<int>(anchor_stamps.size()) ? anchor_stamps[node] : -1.0;
+      };
+      loops_csv << e.from << ',' << e.to << ',' << std::setprecision(6) << stamp(e.from) << ',' << stamp(e.to) << ','
+                << std::setprecision(7) << t.x() << ',' << t.y() << ',' << t.z() << ',' << q.x() << ',' << q.y()
+                << ',' << q.z() << ',' << q.w() << ',' << (loop.kept ? 1 : 0) << '\n';
+    }
+    st::io::writeTextFile(output.path("loops.csv"), loops_csv.str());
+    for (size_t k = 0; k < trajectory.size(); ++k) {
+      const auto& [submap, T_W_C] = poses_in_submaps[k];
+      if (submap >= 0) trajectory[k].T_W_C = pipeline.submapPlace(submap).T_map_W * T_W_C;
+    }
+  }
   st::io::writeTrajectory(output.path("trajectory.txt"), trajectory);
   st::io::writeTextFile(output.path("frames.csv"), frames_csv.str());
   pipeline.withWholeMap([&](const st::TsdfMap& map) {  // swapped blocks included
@@ -384,7 +439,20 @@ int run(int argc, char** argv) {
   }
   summary << "\nplace memory: " << pipeline.places().keyframes().size() << " keyframes, "
           << pipeline.places().bytesPerKeyframe() << " bytes each";
-  summary << "\nmemory: " << st::toString(v.type) << " map " << pipeline.map().memoryBytes() / 1048576.0 << " MiB";
+  if (pipeline.config().submaps.enabled()) {
+    summary << "\nsubmaps: " << pipeline.submapCount() << " (SubmapSize " << pipeline.config().submaps.max_distance_m
+            << " m, SubmapTurn " << pipeline.config().submaps.max_rotation_deg << " deg), merged into one for the files";
+  }
+  if (pipeline.config().loops.enabled) {
+    summary << "\nloops: " << pipeline.loopsClosed() << " closed, " << pipeline.loopsRejected()
+            << " rejected by the pose graph; "
+            << loop_search_ms.size() << " frames searched for one (ms per frame: median "
+            << st::tools::percentile(loop_search_ms, 0.5) << ", max " << st::tools::percentile(loop_search_ms, 1.0)
+            << "); graph solved (off the tracking thread) in " << st::tools::percentile(optimise_ms, 0.5) << " ms (median), "
+            << st::tools::percentile(optimise_ms, 1.0) << " ms (max); trajectory.txt is the optimised path, "
+            << "trajectory_online.txt the one published at the time";
+  }
+  summary << "\nmemory: " << st::toString(v.type) << " map " << pipeline.mapMemoryBytes() / 1048576.0 << " MiB";
   if (const st::MapMemoryBudget* budget = pipeline.memoryBudget()) {
     summary << " (MaxMemoryMB " << pipeline.config().max_map_memory_mb << "; " << budget->swap().size()
             << " blocks, " << budget->swap().bytesOnDisk() / 1048576.0 << " MiB, in the swap file at the end)";
@@ -392,7 +460,7 @@ int run(int argc, char** argv) {
   summary << ", peak resident " << peak_rss_mb << " MiB\n";
   if (swap_errors > 0) {
     summary << "swap file failed on " << swap_errors << " frame" << (swap_errors > 1 ? "s" : "")
-            << ", blocks kept in memory (the map ended at " << pipeline.map().memoryBytes() / 1048576.0
+            << ", blocks kept in memory (the map ended at " << pipeline.mapMemoryBytes() / 1048576.0
             << " MiB against MaxMemoryMB " << pipeline.config().max_map_memory_mb << "); the first: "
             << first_swap_error << "\n";
   }
@@ -420,7 +488,14 @@ int run(int argc, char** argv) {
          << ", \"" << stages[i].first << "_p95\": " << jsonNumber(st::tools::percentile(*stages[i].second, 0.95));
   }
   json << "},\n  \"peak_rss_mb\": " << jsonNumber(peak_rss_mb)
-       << ",\n  \"grid_mb\": " << jsonNumber(pipeline.map().memoryBytes() / 1048576.0)
+       << ",\n  \"grid_mb\": " << jsonNumber(pipeline.mapMemoryBytes() / 1048576.0)
+       << ",\n  \"submaps\": " << pipeline.submapCount() << ",\n  \"loops_closed\": " << pipeline.loopsClosed()
+       << ",\n  \"loops_rejected\": " << pipeline.loopsRejected() << ",\n  \"loop_search\": {\"searched_frames\": "
+       << loop_search_ms.size() << ", \"ms_median\": " << jsonNumber(st::tools::percentile(loop_search_ms, 0.5))
+       << ", \"ms_max\": " << jsonNumber(st::tools::percentile(loop_search_ms, 1.0))
+       << "},\n  \"graph_solve\": {\"solves\": " << optimise_ms.size()
+       << ", \"ms_median\": " << jsonNumber(st::tools::percentile(optimise_ms, 0.5))
+       << ", \"ms_max\": " << jsonNumber(st::tools::percentile(optimise_ms, 1.0)) << "}"
        << ",\n  \"swapped_mb\": "
        << jsonNumber(pipeline.memoryBudget() ? pipeline.memoryBudget()->swap().bytesOnDisk() / 1048576.0 : 0.0)
        << ",\n  \"elapsed_s\": " << jsonNumber(elapsed_s)

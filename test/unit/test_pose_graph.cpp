@@ -1,11 +1,15 @@
 // The pose graph on its own: a square of four submaps whose odometry drifts, closed by a loop;
-// a wrong loop among right ones rejected; edges and options that make no sense refused.
+// a wrong loop among right ones rejected; edges and options that make no sense refused; the
+// solver that runs it off the caller's thread.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
+#include <thread>
+#include <vector>
 
+#include "sdf_tracker/graph/background_solver.h"
 #include "sdf_tracker/graph/pose_graph.h"
 
 namespace sdf_tracker {
@@ -169,6 +173,45 @@ TEST(PoseGraph, AnEdgeOrOptionThatMakesNoSenseIsRefusedByName) {
   } catch (const std::invalid_argument& e) {
     EXPECT_STREQ(e.what(), "pose graph options: loop_loss_sigma must be > 0, got -1; ");
   }
+}
+
+TEST(BackgroundGraphSolver, GivesWhatASolveInPlaceGivesAndTheNewestGraphLast) {
+  BackgroundGraphSolver solver;
+  EXPECT_FALSE(solver.busy());
+  EXPECT_FALSE(solver.poll().has_value()) << "nothing was handed over";
+  EXPECT_FALSE(solver.finish().has_value());
+
+  const std::vector<Eigen::Isometry3d> truth = squareTruth();
+  const PoseGraph square = driftingSquare(truth);
+  PoseGraph with_wrong_loop = square;
+  with_wrong_loop.addEdge({2, 0, pose(0.5, 0.5, 0, 0.3), information(0.01, 0.005), PoseEdgeKind::kLoop});
+  // The second graph is handed over while the first may still run: both are solved, in order.
+  solver.solve(square);
+  solver.solve(with_wrong_loop);
+  EXPECT_TRUE(solver.busy());
+  const std::optional<BackgroundGraphSolver::Result> last = solver.finish();
+  EXPECT_FALSE(solver.busy());
+  ASSERT_TRUE(last.has_value());
+  EXPECT_EQ(last->graph.edges().size(), with_wrong_loop.edges().size()) << "the newest graph is solved last";
+  const PoseGraphSolution in_place = with_wrong_loop.optimise();
+  ASSERT_EQ(last->solution.poses.size(), in_place.poses.size());
+  for (size_t i = 0; i < in_place.poses.size(); ++i) {
+    EXPECT_TRUE(last->solution.poses[i].isApprox(in_place.poses[i], 1e-9)) << "node " << i;
+  }
+  EXPECT_EQ(last->solution.rejected_loops, in_place.rejected_loops);
+  EXPECT_EQ(last->solution.rejected_loops, std::vector<int>{4}) << "the wrong loop is rejected off the thread too";
+  EXPECT_GE(last->solve_ms, 0.0);
+
+  // poll() never waits: it returns nothing until the solve is done, then the result once.
+  solver.solve(square);
+  std::optional<BackgroundGraphSolver::Result> polled;
+  for (int i = 0; i < 10000 && !polled; ++i) {
+    polled = solver.poll();
+    if (!polled) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_TRUE(polled.has_value()) << "no result after 10 s";
+  EXPECT_EQ(polled->graph.edges().size(), square.edges().size());
+  EXPECT_FALSE(solver.poll().has_value());
 }
 
 }  // namespace

@@ -62,6 +62,9 @@ class PoseGraph {
  public:
   /// Adds a node at T_map_node (the initial guess); returns its index.
   int addNode(const Eigen::Isometry3d& T_map_node);
+  /// Moves node `node` to T_map_node (where the next solve starts from, as a solution placed it);
+  /// throws std::out_of_range for no such node.
+  void setPose(int node, const Eigen::Isometry3d& T_map_node);
   /// Throws std::invalid_argument naming the edge's problem: a node that does not exist, an edge from
   /// a node to itself, or an information matrix that is not symmetric positive definite or finite.
   void addEdge(const PoseEdge& edge);

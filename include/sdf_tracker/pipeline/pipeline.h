@@ -13,7 +13,11 @@
 #include "sdf_tracker/camera/depth_undistortion.h"
 #include "sdf_tracker/fusion/integrator.h"
 #include "sdf_tracker/map/block_swap.h"
+#include "sdf_tracker/graph/background_solver.h"
+#include "sdf_tracker/graph/pose_graph.h"
 #include "sdf_tracker/map/tsdf_map.h"
+#include "sdf_tracker/pipeline/loop_closure.h"
+#include "sdf_tracker/pipeline/submaps.h"
 #include "sdf_tracker/places/place_memory.h"
 #include "sdf_tracker/relocalisation/relocaliser.h"
 #include "sdf_tracker/surface/raycaster.h"
@@ -69,6 +73,11 @@ struct PipelineConfig {
   bool relocalise = false;
   PlaceMemoryConfig places;
   RelocaliserConfig relocaliser;
+  /// The map as a sequence of submaps along the path (sparse map only, no memory budget); off by
+  /// default: one map.
+  SubmapConfig submaps;
+  /// Loops between submaps, and the pose graph that places them (needs submaps); off by default.
+  LoopClosureConfig loops;
 
   std::vector<std::string> validate() const;
 };
@@ -98,6 +107,27 @@ struct RelocalisationReport {
   std::string message;  ///< why nothing was kept, or why no search could run
 };
 
+/// A frame's loop closure (FrameReport::loop): the search for a loop, and a pose graph solution
+/// that landed (solved off the tracking thread, see SdfPipeline).
+struct LoopReport {
+  bool searched = false;  ///< a loop search ran on this frame
+  int submap = -1;        ///< in which older submap
+  /// The camera was found there: a loop edge joins that submap to the active one, and the graph
+  /// is being solved in the background.
+  bool found = false;
+  /// A solution landed on this frame: how many loops found since the last one it kept, and how
+  /// many it found wrong and left out.
+  bool solved = false;
+  int closed = 0;
+  int rejected = 0;
+  /// How far that solution moved the active submap in the map frame [m, degrees].
+  double correction_m = 0.0;
+  double correction_deg = 0.0;
+  double search_ms = 0.0;
+  double optimise_ms = 0.0;  ///< the landed solve's time (on its own thread)
+  std::string message;       ///< why a search ended without a loop
+};
+
 /// What happened to one frame.
 struct FrameReport {
   TrackResult track;
@@ -121,6 +151,14 @@ struct FrameReport {
   /// written stay in memory; blocks that could not be read back stay in the file.
   std::string swap_error;
   RelocalisationReport relocalisation;
+  /// The frame started a new submap (it is fused into it and into the one before).
+  bool started_submap = false;
+  /// The frame was tracked against the submap before the active one (its first frames, see
+  /// SubmapConfig::handover_frames), or against the whole map it was just found in.
+  bool tracked_in_previous_submap = false;
+  /// The submap whose frame the pose is in (SubmapPlace::node; 0 without submaps).
+  int submap = 0;
+  LoopReport loop;
 };
 
 /// The on-line loop: track each frame against the map, then fuse it at the tracked pose. Owns the
@@ -156,17 +194,48 @@ class SdfPipeline {
   /// Camera to world at the last accepted frame.
   const Eigen::Isometry3d& pose() const { return T_W_C_; }
   /// The map in memory (a TsdfVolume or a SparseTsdfMap, per config().volume.type): with a
-  /// memory budget, without the blocks swapped to disk (see withWholeMap()).
+  /// memory budget, without the blocks swapped to disk; with submaps, the active one (see
+  /// withWholeMap()).
   const TsdfMap& map() const { return *map_; }
-  /// A copy of the whole map, swapped blocks included: what a save or a whole mesh must read.
+  /// A copy of the whole map, swapped blocks included, submaps merged into one: what a save or a
+  /// whole mesh must read.
   std::unique_ptr<TsdfMap> copyWholeMap() const;
-  /// Calls fn(const TsdfMap&) with the whole map: the map itself when nothing is swapped out,
-  /// else a copy with the swapped blocks read back (memory beyond the budget while it runs).
+  /// Calls fn(const TsdfMap&) with the whole map: the map itself when nothing is swapped out and
+  /// it is one submap, else a copy with the swapped blocks read back or the submaps merged (memory
+  /// beyond the budget while it runs).
   template <typename Fn>
   void withWholeMap(Fn&& fn) const {
-    if (!budget_ || budget_->swap().size() == 0) return fn(*map_);
+    if ((!budget_ || budget_->swap().size() == 0) && closed_submaps_.empty()) return fn(*map_);
     fn(*copyWholeMap());
   }
+  /// The submaps before the active one, oldest first (none without submaps).
+  const std::vector<Submap>& closedSubmaps() const { return closed_submaps_; }
+  /// The submaps, the active one included (1 without submaps).
+  size_t submapCount() const { return closed_submaps_.size() + 1; }
+  /// Bytes the map's voxels hold in memory, every submap's (and a search's copy of them all).
+  size_t mapMemoryBytes() const;
+  /// Where the camera was when the active submap started.
+  const Eigen::Isometry3d& activeSubmapAnchor() const { return active_.T_W_anchor; }
+  /// Where submap `node` lies (closed or active); throws std::out_of_range for no such submap.
+  const SubmapPlace& submapPlace(int node) const;
+  /// pose() in the map frame: where the pose graph puts the camera (pose() itself without loops).
+  Eigen::Isometry3d mapPose() const { return active_.T_map_W * T_W_C_; }
+  /// The submaps' pose graph (nodes added as submaps start; empty without submaps).
+  const PoseGraph& poseGraph() const { return graph_; }
+  /// A loop edge the loop detector added to poseGraph(), and whether the latest solution kept it
+  /// (false also while it waits for its first solve).
+  struct Loop {
+    PoseEdge edge;
+    bool kept = false;
+  };
+  std::vector<Loop> loops() const;
+  /// Loops the latest solution kept, and every loop found wrong so far.
+  int loopsClosed() const { return loops_closed_; }
+  int loopsRejected() const { return loops_rejected_; }
+  /// Waits for the pose graph's solve, if one runs or waits, and applies it: what a run's final
+  /// trajectory and map must see. The report says what it kept and moved (solved = false: nothing
+  /// was pending).
+  LoopReport finishLoopClosure();
   /// The memory budget (MaxMemoryMB), or nullptr when there is none.
   const MapMemoryBudget* memoryBudget() const { return budget_.get(); }
   /// Frames in a row that could not be tracked (0 while tracking works).
@@ -226,6 +295,29 @@ class SdfPipeline {
   /// The relocaliser's step on a frame whose pose is not known; fills report->relocalisation and,
   /// once a candidate is accepted, report->track and the pose. Returns whether it was accepted.
   bool search(const DepthImage& filtered, const PinholeCamera& camera, FrameReport* report);
+  /// What frames are tracked against: the active submap, or during a handover the map before it.
+  const TsdfMap& trackingMap() const { return handover_map_ ? *handover_map_ : *map_; }
+  /// What a search looks in: the whole map (submaps merged while it runs), or the active one.
+  const TsdfMap& searchMap() const { return search_map_ ? *search_map_ : *map_; }
+  /// Closes the active submap (when it holds anything) and starts a new one at T_W_C_, its first
+  /// frames tracked against the closed one and fused into both, or, `after_search`, tracked
+  /// against the whole map the camera was found in.
+  void startSubmap(bool after_search);
+  /// Ends a handover (or none): frames are tracked against the active submap alone.
+  void endHandover();
+  /// Frees a search's copy of the whole map unless a handover still tracks against it.
+  void dropSearchMap();
+  /// Back to one empty submap (and no graph), for a cleared or replaced map.
+  void clearSubmaps();
+  /// The keyframes at their places in the map frame, for a search in the merged submaps.
+  std::unique_ptr<PlaceMemory> placesInMapFrame() const;
+  /// The loop detector's step on a tracked frame; a loop found goes into the graph, which is
+  /// handed to the background solver.
+  void closeLoops(const DepthImage& filtered, const PinholeCamera& camera, FrameReport* report);
+  /// Places every submap where a solution of the graph puts it (those started since it was
+  /// handed over move with the newest it holds) and says so in `report`.
+  void applyGraphSolution(const BackgroundGraphSolver::Result& result, LoopReport* report);
+  SubmapPlace& placeOf(int node) { return node == active_.node ? active_ : closed_submaps_.at(node).place; }
 
   PipelineConfig config_;
   std::unique_ptr<TsdfMap> map_;
@@ -257,6 +349,31 @@ class SdfPipeline {
   std::optional<Eigen::Isometry3d> search_guess_;
   /// The poses the current search tries first on every frame.
   std::vector<Eigen::Isometry3d> search_guesses_;
+  /// The whole map while a search runs in a map of several submaps, and after it found the
+  /// camera until the new submap's handover ends.
+  std::unique_ptr<TsdfMap> search_map_;
+  std::vector<Submap> closed_submaps_;
+  /// Where the active submap (map_) lies.
+  SubmapPlace active_;
+  /// The keyframes while a search runs in the merged submaps, at their places in the map frame.
+  std::unique_ptr<PlaceMemory> search_places_;
+  /// The submap each keyframe of places_ was taken in (its pose is in that submap's frame).
+  std::vector<int> keyframe_submaps_;
+  PoseGraph graph_;
+  std::unique_ptr<LoopDetector> loop_detector_;
+  std::unique_ptr<BackgroundGraphSolver> graph_solver_;
+  /// The graph's edges that closeLoops() added (the one after a search in the merged map joins a
+  /// submap, but is no loop found), and how many edges the last solution applied held.
+  std::vector<size_t> loop_edges_;
+  size_t solved_edges_ = 0;
+  std::vector<int> rejected_edges_;  ///< the latest solution's
+  int loops_closed_ = 0;
+  int loops_rejected_ = 0;
+  /// During a handover: the map frames are tracked against, the frames left, and whether they
+  /// are fused into it too (the closed submap; not a search's merged copy).
+  const TsdfMap* handover_map_ = nullptr;
+  int handover_frames_left_ = 0;
+  bool handover_fuses_previous_ = false;
 };
 
 }  // namespace sdf_tracker

@@ -1,0 +1,55 @@
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "sdf_tracker/map/tsdf_map.h"
+
+namespace sdf_tracker {
+
+/// When the map is split into submaps along the path, each a sparse map over a stretch of it: what
+/// loop closure moves (each submap holds the drift of its own stretch only, and a pose graph can
+/// place them anew). Sparse map only.
+struct SubmapConfig {
+  /// A new submap starts once the camera is this far from where the active one started [m]; 0:
+  /// one map for the whole path (no submaps).
+  double max_distance_m = 0.0;
+  /// ... or once it has turned this much from the way it looked there [degrees].
+  double max_rotation_deg = 60.0;
+  /// The first frames of a new submap are tracked against the one before and fused into both, so
+  /// that the new one holds the view before the tracker relies on it alone.
+  int handover_frames = 10;
+
+  bool enabled() const { return max_distance_m > 0.0; }
+  std::vector<std::string> validate() const;
+};
+
+/// Where a submap lies. Its voxels and anchor are in W, the frame the tracker worked in while it
+/// was fused; the pose graph places W in the map frame (T_map_W, the identity until a loop
+/// corrects it).
+struct SubmapPlace {
+  Eigen::Isometry3d T_W_anchor = Eigen::Isometry3d::Identity();  ///< the camera's pose when it started
+  Eigen::Isometry3d T_map_W = Eigen::Isometry3d::Identity();
+  int node = 0;          ///< its node in the pose graph: its index among the submaps, oldest first
+  int frames_fused = 0;
+  /// How far the camera had gone from the first submap's anchor to this one's, anchor to anchor
+  /// [m]: the length of path between two submaps, over which drift grows.
+  double path_m = 0.0;
+  /// T_map_anchor: the node's pose in the graph.
+  Eigen::Isometry3d T_map_anchor() const { return T_map_W * T_W_anchor; }
+};
+
+/// A stretch of the path's map that is no longer fused into.
+struct Submap {
+  std::unique_ptr<TsdfMap> map;
+  SubmapPlace place;
+};
+
+/// Whether the camera at T_W_C has left the submap started at T_W_anchor (SubmapConfig's distance
+/// or turn).
+bool leavesSubmap(const SubmapConfig& config, const Eigen::Isometry3d& T_W_anchor, const Eigen::Isometry3d& T_W_C);
+
+}  // namespace sdf_tracker

@@ -1,0 +1,132 @@
+#include "sdf_tracker/map/map_merge.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <unordered_set>
+
+namespace sdf_tracker {
+
+namespace {
+
+/// Adds `voxel`'s observation to `into` as a fusion of the same measurements would have.
+void accumulate(const Voxel& voxel, Voxel* into) {
+  if (voxel.weight <= 0.0f) return;
+  const float weight = into->weight + voxel.weight;
+  into->distance_m = (into->distance_m * into->weight + voxel.distance_m * voxel.weight) / weight;
+  into->weight = weight;
+}
+
+/// The part's voxels as they are (a part at the identity).
+void addAsIs(const SparseTsdfMap& part, SparseTsdfMap* merged) {
+  part.forEachBlock([&](const SparseTsdfMap::BlockIndex& index, const VoxelBlock& block) {
+    VoxelBlock* into = merged->find(index);
+    if (into == nullptr) {
+      merged->allocate(index).voxels = block.voxels;
+      return;
+    }
+    for (int i = 0; i < kBlockVoxels; ++i) accumulate(block.voxels[i], &into->voxels[i]);
+  });
+}
+
+/// The part's distance and weight at continuous lattice coordinates: trilinear where all eight
+/// samples around are observed, else unobserved.
+Voxel resample(const SparseTsdfMap& part, const Eigen::Vector3f& lattice) {
+  const Eigen::Vector3f floor = lattice.array().floor();
+  const Eigen::Vector3i first = floor.cast<int>();
+  const Eigen::Vector3f f = lattice - floor;
+  Voxel out{0.0f, 0.0f};
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3i offset(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+    const Voxel v = part.voxel(first + offset);
+    if (v.weight <= 0.0f) return Voxel{part.positiveTruncation(), 0.0f};
+    const float w = (offset.x() ? f.x() : 1.0f - f.x()) * (offset.y() ? f.y() : 1.0f - f.y()) *
+                    (offset.z() ? f.z() : 1.0f - f.z());
+    out.distance_m += w * v.distance_m;
+    out.weight += w * v.weight;
+  }
+  return out;
+}
+
+/// The part's voxels resampled at the merged lattice's voxels where it lies moved by T_target_map.
+void addMoved(const PlacedMap& placed, SparseTsdfMap* merged) {
+  const SparseTsdfMap& part = *placed.map;
+  const Eigen::Isometry3f T_target_part = placed.T_target_map.cast<float>();
+  // The merged blocks the part's blocks reach once moved (their corners' box, a voxel wider).
+  std::unordered_set<uint64_t> keys;
+  const float reach = part.voxelSize();
+  part.forEachBlock([&](const SparseTsdfMap::BlockIndex& index, const VoxelBlock&) {
+    Eigen::AlignedBox3f box;
+    const Eigen::Vector3f lo = part.position(SparseTsdfMap::firstVoxel(index));
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3f corner(c & 1 ? kBlockSide : 0, (c >> 1) & 1 ? kBlockSide : 0, (c >> 2) & 1 ? kBlockSide : 0);
+      box.extend(T_target_part * (lo + part.voxelSize() * corner));
+    }
+    const BlockBox blocks =
+        merged->blockRange(Eigen::AlignedBox3f(box.min().array() - reach, box.max().array() + reach));
+    blocks.forEach([&](const Eigen::Vector3i& b) { keys.insert(SparseTsdfMap::keyOf(b)); });
+  });
+  const std::vector<SparseTsdfMap::BlockIndex> indices =
+      SparseTsdfMap::indicesOf(std::vector<uint64_t>(keys.begin(), keys.end()));
+  // Blocks are added first, by one thread; then every block is filled on its own.
+  std::vector<VoxelBlock*> blocks(indices.size());
+  std::vector<char> added(indices.size(), 0);
+  for (size_t i = 0; i < indices.size(); ++i) {
+    blocks[i] = merged->find(indices[i]);
+    if (blocks[i] == nullptr) {
+      blocks[i] = &merged->allocate(indices[i]);
+      added[i] = 1;
+    }
+  }
+  const Eigen::Isometry3f T_part_target = T_target_part.inverse();
+#pragma omp parallel for schedule(dynamic, 8)
+  for (long i = 0; i < static_cast<long>(indices.size()); ++i) {
+    const Eigen::Vector3i first = SparseTsdfMap::firstVoxel(indices[i]);
+    for (int z = 0; z < kBlockSide; ++z) {
+      for (int y = 0; y < kBlockSide; ++y) {
+        for (int x = 0; x < kBlockSide; ++x) {
+          const Eigen::Vector3f p_part = T_part_target * merged->position(first + Eigen::Vector3i(x, y, z));
+          accumulate(resample(part, part.toLattice(p_part)), &blocks[i]->voxels[VoxelBlock::index(x, y, z)]);
+        }
+      }
+    }
+  }
+  // A block the part only grazed holds nothing it observed: it is not kept.
+  for (size_t i = 0; i < indices.size(); ++i) {
+    if (!added[i]) continue;
+    const auto& v = blocks[i]->voxels;
+    if (std::none_of(v.begin(), v.end(), [](const Voxel& voxel) { return voxel.weight > 0.0f; })) {
+      merged->discardUnobserved(indices[i]);
+    }
+  }
+}
+
+}  // namespace
+
+SparseTsdfMap mergeMaps(const std::vector<PlacedMap>& parts) {
+  if (parts.empty()) throw std::invalid_argument("mergeMaps: no maps to merge");
+  for (size_t k = 0; k < parts.size(); ++k) {
+    if (parts[k].map == nullptr) throw std::invalid_argument("mergeMaps: part " + std::to_string(k) + " is no map");
+    if (!parts[k].map->config().sameGrid(parts[0].map->config())) {
+      throw std::invalid_argument("mergeMaps: part " + std::to_string(k) + " (" + parts[k].map->config().describe() +
+                                  ") is not on the lattice of part 0 (" + parts[0].map->config().describe() + ")");
+    }
+    if (!parts[k].T_target_map.matrix().allFinite()) {
+      throw std::invalid_argument("mergeMaps: part " + std::to_string(k) + " has a non-finite pose");
+    }
+  }
+  SparseTsdfMap merged(parts[0].map->config());
+  const uint64_t revision = merged.beginRevision();
+  for (const PlacedMap& part : parts) {
+    if (part.T_target_map.matrix() == Eigen::Matrix4d::Identity()) {
+      addAsIs(*part.map, &merged);
+    } else {
+      addMoved(part, &merged);
+    }
+  }
+  merged.forEachBlock([revision](const SparseTsdfMap::BlockIndex&, VoxelBlock& block) { block.changed_at = revision; });
+  return merged;
+}
+
+}  // namespace sdf_tracker

@@ -1,0 +1,149 @@
+#include "sdf_tracker/pipeline/loop_closure.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "sdf_tracker/util/se3.h"
+#include "sdf_tracker/util/validation.h"
+
+namespace sdf_tracker {
+
+namespace {
+
+constexpr double kRadPerDeg = M_PI / 180.0;
+
+PoseInformation diagonalInformation(double sigma_m, double sigma_rad) {
+  PoseInformation information = PoseInformation::Zero();
+  information.diagonal() << Eigen::Vector3d::Constant(1.0 / (sigma_m * sigma_m)),
+      Eigen::Vector3d::Constant(1.0 / (sigma_rad * sigma_rad));
+  return information;
+}
+
+}  // namespace
+
+std::vector<std::string> LoopClosureConfig::validate() const {
+  Violations v;
+  v.requireInRange("check_interval_frames", check_interval_frames, 1, 100000);
+  v.requireInRange("min_submap_age", min_submap_age, 2, 100000);
+  v.requireNonNegative("min_path_m", min_path_m);
+  v.requirePositive("search_radius_m", search_radius_m);
+  v.requireInRange("search_angle_deg", search_angle_deg, 1.0, 180.0);
+  v.requireInRange("max_search_frames", max_search_frames, 1, 1000);
+  v.requireInRange("retry_after_frames", retry_after_frames, 0, 100000);
+  v.requirePositive("loop_sigma_m", loop_sigma_m);
+  v.requirePositive("loop_sigma_deg", loop_sigma_deg);
+  v.requireNonNegative("odometry_drift", odometry_drift);
+  v.requireNonNegative("odometry_drift_deg_per_m", odometry_drift_deg_per_m);
+  v.requirePositive("odometry_floor_m", odometry_floor_m);
+  v.requirePositive("odometry_floor_deg", odometry_floor_deg);
+  return v.list();
+}
+
+PoseInformation odometryEdgeInformation(const LoopClosureConfig& config, const Eigen::Isometry3d& motion) {
+  const double distance_m = motion.translation().norm();
+  return diagonalInformation(config.odometry_floor_m + config.odometry_drift * distance_m,
+                             (config.odometry_floor_deg + config.odometry_drift_deg_per_m * distance_m) * kRadPerDeg);
+}
+
+PoseInformation loopEdgeInformation(const LoopClosureConfig& config) {
+  return diagonalInformation(config.loop_sigma_m, config.loop_sigma_deg * kRadPerDeg);
+}
+
+LoopDetector::LoopDetector(const LoopClosureConfig& config, const RelocaliserConfig& relocaliser,
+                           const TrackerConfig& tracker, const PlaceMemoryConfig& places)
+    : config_(config), relocaliser_(relocaliser, tracker), search_places_(places) {
+  const std::vector<std::string> violations = config.validate();
+  if (!violations.empty()) throw std::invalid_argument("invalid loop closure config: " + violations.front());
+  frames_until_check_ = config_.check_interval_frames;
+}
+
+void LoopDetector::reset() {
+  relocaliser_.cancel();
+  search_submap_ = -1;
+  search_frames_ = 0;
+  frames_until_check_ = config_.check_interval_frames;
+  joined_.clear();
+}
+
+std::optional<int> LoopDetector::candidate(const DepthImage& depth, const Eigen::Isometry3d& T_map_C,
+                                           const SubmapPlace& active, const std::vector<Submap>& closed,
+                                           const PlaceMemory& places, const std::vector<int>& keyframe_submaps) const {
+  const int newest_candidate = active.node - config_.min_submap_age;
+  if (newest_candidate < 0 || places.empty()) return std::nullopt;
+  const PlaceCode code = places.encoder().encode(depth);
+  std::optional<int> best;
+  double best_dissimilarity = relocaliser_.config().max_dissimilarity;
+  const std::vector<Keyframe>& keyframes = places.keyframes();
+  for (size_t k = 0; k < keyframes.size() && k < keyframe_submaps.size(); ++k) {
+    const int submap = keyframe_submaps[k];
+    if (submap < 0 || submap > newest_candidate || submap >= static_cast<int>(closed.size())) continue;
+    if (std::find(joined_.begin(), joined_.end(), submap) != joined_.end()) continue;
+    if (active.path_m - closed[submap].place.path_m < config_.min_path_m) continue;
+    const Eigen::Isometry3d offset = T_map_C.inverse() * closed[submap].place.T_map_W * keyframes[k].T_W_C;
+    if (offset.translation().norm() > config_.search_radius_m ||
+        rotationAngle(offset) > config_.search_angle_deg * kRadPerDeg) {
+      continue;
+    }
+    const double dissimilarity = PlaceEncoder::dissimilarity(code, keyframes[k].code);
+    if (dissimilarity <= best_dissimilarity) {
+      best_dissimilarity = dissimilarity;
+      best = submap;
+    }
+  }
+  return best;
+}
+
+LoopDetector::Step LoopDetector::step(const DepthImage& depth, const PinholeCamera& camera,
+                                      const Eigen::Isometry3d& T_A_C, const SubmapPlace& active,
+                                      const std::vector<Submap>& closed, const PlaceMemory& places,
+                                      const std::vector<int>& keyframe_submaps) {
+  Step result;
+  const Eigen::Isometry3d T_map_C = active.T_map_W * T_A_C;
+  if (search_submap_ < 0) {
+    if (--frames_until_check_ > 0) return result;
+    frames_until_check_ = config_.check_interval_frames;
+    const std::optional<int> submap = candidate(depth, T_map_C, active, closed, places, keyframe_submaps);
+    if (!submap) return result;
+    search_places_.clear();
+    const std::vector<Keyframe>& keyframes = places.keyframes();
+    for (size_t k = 0; k < keyframes.size() && k < keyframe_submaps.size(); ++k) {
+      if (keyframe_submaps[k] == *submap) search_places_.add(keyframes[k]);
+    }
+    try {
+      relocaliser_.begin(*closed[*submap].map);
+    } catch (const std::invalid_argument&) {
+      return result;  // a submap without a surface: nothing to find there
+    }
+    search_submap_ = *submap;
+    search_frames_ = 0;
+  }
+  const Submap& old = closed[search_submap_];
+  // Where the graph puts the camera in the old submap: the first start of the search.
+  const Eigen::Isometry3d guess = old.place.T_map_W.inverse() * T_map_C;
+  const Relocaliser::Step found = relocaliser_.step(depth, camera, *old.map, search_places_, {guess});
+  ++search_frames_;
+  result.searched = true;
+  result.submap = search_submap_;
+  const bool accepted = found.outcome == Relocaliser::Outcome::kAccepted;
+  // However well it fits, a place further from the graph's guess than the search reached is not
+  // the one looked for.
+  const Eigen::Isometry3d offset = guess.inverse() * found.T_W_C;
+  const bool plausible = offset.translation().norm() <= config_.search_radius_m &&
+                         rotationAngle(offset) <= config_.search_angle_deg * kRadPerDeg;
+  if (accepted && plausible) {
+    result.match = LoopMatch{search_submap_, found.T_W_C, found.track};
+  } else if (accepted || search_frames_ >= config_.max_search_frames ||
+             found.outcome == Relocaliser::Outcome::kAmbiguous) {
+    result.message = accepted ? "found further from where the graph puts it than search_radius_m"
+                              : (found.message.empty() ? std::string(toString(found.outcome)) : found.message);
+  } else {
+    return result;  // still confirming or searching
+  }
+  relocaliser_.cancel();
+  search_submap_ = -1;
+  frames_until_check_ = result.match ? config_.check_interval_frames : std::max(1, config_.retry_after_frames);
+  return result;
+}
+
+}  // namespace sdf_tracker

@@ -1,0 +1,195 @@
+// Loop closure between submaps: the edges' uncertainty, a camera that comes back to where it
+// started (its loops against the truth), and the parameters that set it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "sdf_tracker/pipeline/loop_closure.h"
+#include "sdf_tracker/pipeline/parameters.h"
+#include "sdf_tracker/pipeline/pipeline.h"
+#include "sdf_tracker/sim/synthetic.h"
+#include "sdf_tracker/util/se3.h"
+#include "test_helpers.h"
+
+namespace sdf_tracker {
+namespace {
+
+constexpr double kFramePeriod_s = 1.0 / 30.0;
+
+TEST(LoopClosure, OdometryIsTrustedLessTheFurtherItGoesAndALoopByItsFit) {
+  LoopClosureConfig config;
+  Eigen::Isometry3d metre = Eigen::Isometry3d::Identity();
+  metre.translation() = Eigen::Vector3d(0.6, 0.0, 0.8);
+  const PoseInformation one_metre = odometryEdgeInformation(config, metre);
+  const double sigma_m = config.odometry_floor_m + config.odometry_drift * 1.0;
+  const double sigma_rad = (config.odometry_floor_deg + config.odometry_drift_deg_per_m * 1.0) * M_PI / 180.0;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(one_metre(i, i), 1.0 / (sigma_m * sigma_m), 1e-6);
+    EXPECT_NEAR(one_metre(i + 3, i + 3), 1.0 / (sigma_rad * sigma_rad), 1e-3);
+  }
+  EXPECT_EQ((one_metre - PoseInformation(one_metre.diagonal().asDiagonal())).norm(), 0.0) << "diagonal";
+  // Standing still: the floors, not infinite trust.
+  const PoseInformation still = odometryEdgeInformation(config, Eigen::Isometry3d::Identity());
+  EXPECT_NEAR(still(0, 0), 1.0 / (config.odometry_floor_m * config.odometry_floor_m), 1e-6);
+  EXPECT_GT(still(0, 0), one_metre(0, 0));
+  const PoseInformation loop = loopEdgeInformation(config);
+  EXPECT_NEAR(loop(2, 2), 1.0 / (config.loop_sigma_m * config.loop_sigma_m), 1e-6);
+  EXPECT_NEAR(loop(5, 5), std::pow(config.loop_sigma_deg * M_PI / 180.0, -2), 1e-3);
+}
+
+/// The default preset of 3 cm voxels, with submaps every `submap_m` and loops closed.
+PipelineConfig loopPipeline(double submap_m) {
+  PipelineConfig config = preset("default").pipeline;
+  config.volume.voxel_size_m = 0.03;
+  config.submaps.max_distance_m = submap_m;
+  config.loops.enabled = true;
+  config.loops.check_interval_frames = 5;
+  return config;
+}
+
+/// The room round the desk (Motion::kLoop), seen with a depth error fixed in the image: the
+/// tracker's path drifts, and comes back to where it started every `period_s`.
+struct CircleRun {
+  std::vector<Eigen::Isometry3d> truth;                       ///< in the first camera's frame
+  std::vector<std::pair<int, Eigen::Isometry3d>> in_submaps;  ///< (submap, T_W_C) as tracked
+  std::vector<Eigen::Isometry3d> published;                   ///< mapPose() at the time
+  std::vector<FrameReport> reports;
+  LoopReport last_solve;  ///< the graph's solve still pending at the end, finished
+};
+
+CircleRun runCircle(SdfPipeline* pipeline, int frames, double period_s) {
+  const PinholeCamera camera = test::testCamera().scaledTo(160, 120);
+  synthetic::NoiseModel biased;
+  biased.enabled = false;
+  biased.depth_bias = 0.04;
+  const synthetic::Scene room = synthetic::Scene::indoorRoom();
+  const Eigen::Isometry3d T_scene_W = synthetic::cameraPose(synthetic::Motion::kLoop, 0.0, period_s);
+  CircleRun run;
+  for (int i = 0; i < frames; ++i) {
+    const Eigen::Isometry3d T_scene_C = synthetic::cameraPose(synthetic::Motion::kLoop, i * kFramePeriod_s, period_s);
+    const FrameReport report =
+        pipeline->processFrame(room.render(camera, T_scene_C, biased, 0), camera, i * kFramePeriod_s);
+    EXPECT_TRUE(report.track.ok()) << "frame " << i << ": " << report.track.message;
+    run.truth.push_back(T_scene_W.inverse() * T_scene_C);
+    run.in_submaps.emplace_back(report.submap, pipeline->pose());
+    run.published.push_back(pipeline->mapPose());
+    run.reports.push_back(report);
+  }
+  run.last_solve = pipeline->finishLoopClosure();
+  return run;
+}
+
+double positionError(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return (a.translation() - b.translation()).norm();
+}
+
+/// Once round the desk (a circle of 1.4 m radius, 8.8 m) in 9 s, and on for 2 s more, with 0.5 m
+/// submaps: run once, for the tests below.
+constexpr double kCirclePeriod_s = 9.0;
+struct Circle {
+  std::unique_ptr<SdfPipeline> pipeline;
+  CircleRun run;
+};
+const Circle& circle() {
+  static const Circle result = [] {
+    Circle c;
+    c.pipeline = std::make_unique<SdfPipeline>(loopPipeline(0.5));
+    c.run = runCircle(c.pipeline.get(), 330, kCirclePeriod_s);
+    return c;
+  }();
+  return result;
+}
+
+TEST(LoopClosure, ACameraBackWhereItStartedClosesALoopThatUndoesTheDrift) {
+  const SdfPipeline& pipeline = *circle().pipeline;
+  const CircleRun& run = circle().run;
+  int found = 0, closed = run.last_solve.closed, rejected = run.last_solve.rejected, searched = 0;
+  for (size_t i = 0; i < run.reports.size(); ++i) {
+    const LoopReport& loop = run.reports[i].loop;
+    searched += loop.searched;
+    closed += loop.closed;
+    rejected += loop.rejected;
+    if (!loop.found) continue;
+    ++found;
+    EXPECT_GE(run.reports[i].submap - loop.submap, pipeline.config().loops.min_submap_age) << "frame " << i;
+  }
+  EXPECT_EQ(closed + rejected, found) << "every loop found was solved, and kept or rejected";
+  EXPECT_EQ(pipeline.loopsClosed(), closed);
+  EXPECT_EQ(pipeline.loopsRejected(), rejected);
+  EXPECT_EQ(rejected, 0) << "a right loop was rejected by the graph";
+  ASSERT_GE(closed, 1) << "back at the start and no loop closed (" << searched << " frames searched)";
+
+  // The path as the graph now places each submap: the drift undone where the camera came back.
+  const size_t back = static_cast<size_t>(kCirclePeriod_s / kFramePeriod_s);  // the first frame's view again
+  const Eigen::Isometry3d optimised_back =
+      pipeline.submapPlace(run.in_submaps[back].first).T_map_W * run.in_submaps[back].second;
+  // The tracker's own path, which no loop moves, against the path as published at the time and
+  // as the graph places it in the end.
+  const double drift_back_m = positionError(run.in_submaps[back].second, run.truth[back]);
+  const double published_back_m = positionError(run.published[back], run.truth[back]);
+  const double optimised_back_m = positionError(optimised_back, run.truth[back]);
+  const double drift_end_m = positionError(run.in_submaps.back().second, run.truth.back());
+  const double end_m = positionError(pipeline.mapPose(), run.truth.back());
+  std::cout << "[ figures  ] " << pipeline.submapCount() << " submaps, " << closed << " loops closed, " << searched
+            << " frames searched; back at the start the tracker had drifted " << drift_back_m * 1e3 << " mm, "
+            << published_back_m * 1e3 << " mm as published, " << optimised_back_m * 1e3
+            << " mm as optimised; at the end " << drift_end_m * 1e3 << " mm, " << end_m * 1e3 << " mm as optimised\n";
+  ASSERT_GT(drift_back_m, 0.1) << "the depth bias no longer makes the path drift: the test shows nothing";
+  EXPECT_LT(published_back_m, 0.25 * drift_back_m) << "the loops did not undo the drift as the camera came back";
+  EXPECT_LT(optimised_back_m, 0.25 * drift_back_m) << "the graph did not undo the drift";
+  EXPECT_LT(end_m, 0.5 * drift_end_m) << "the loops did not hold the path after the return";
+}
+
+TEST(LoopClosure, EveryLoopClosedAgreesWithTheTruth) {
+  // The submaps' anchors are the poses of the frames that started them: a loop edge, the relative
+  // pose of two anchors, must be what the truth says within three of the standard deviations it
+  // is given (a wrong place would be metres off).
+  const SdfPipeline& pipeline = *circle().pipeline;
+  const CircleRun& run = circle().run;
+  std::vector<size_t> anchor_frame = {0};
+  for (size_t i = 0; i < run.reports.size(); ++i) {
+    if (run.reports[i].started_submap) anchor_frame.push_back(i);
+  }
+  ASSERT_EQ(anchor_frame.size(), pipeline.submapCount());
+  int loops = 0;
+  for (const PoseEdge& edge : pipeline.poseGraph().edges()) {
+    if (edge.kind != PoseEdgeKind::kLoop) continue;
+    ++loops;
+    const Eigen::Isometry3d truth = run.truth[anchor_frame[edge.from]].inverse() * run.truth[anchor_frame[edge.to]];
+    const Eigen::Isometry3d error = truth.inverse() * edge.T_from_to;
+    std::cout << "[ figures  ] loop " << edge.to << " -> " << edge.from << ": " << error.translation().norm() * 1e3
+              << " mm, " << rotationAngle(error) * 180.0 / M_PI << " deg from the truth\n";
+    const LoopClosureConfig& config = pipeline.config().loops;
+    EXPECT_LT(error.translation().norm(), 3.0 * config.loop_sigma_m) << "loop " << edge.to << " -> " << edge.from;
+    EXPECT_LT(rotationAngle(error), 3.0 * config.loop_sigma_deg * M_PI / 180.0)
+        << "loop " << edge.to << " -> " << edge.from;
+  }
+  EXPECT_EQ(loops, pipeline.loopsClosed());
+}
+
+TEST(LoopClosure, ParametersRefuseLoopsWithoutSubmapsByName) {
+  Settings settings = preset("default");
+  setParameterFromText(&settings, "LoopClosure", "true");
+  const std::vector<std::string> errors = settings.validate();
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("LoopClosure=true needs SubmapSize > 0"), std::string::npos) << errors[0];
+  EXPECT_NE(errors[0].find("SubmapSize=0"), std::string::npos) << errors[0];
+  setParameterFromText(&settings, "SubmapSize", "2");
+  EXPECT_TRUE(settings.validate().empty());
+
+  Settings unused = preset("default");
+  setParameterFromText(&unused, "LoopSearchRadius", "3");
+  const std::vector<std::string> notes = unused.withoutEffect({"LoopSearchRadius"});
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("LoopSearchRadius=3 has no effect without LoopClosure=true"), std::string::npos) << notes[0];
+  EXPECT_THROW(setParameterFromText(&unused, "LoopSearchRadius", "0"), std::invalid_argument);
+  EXPECT_THROW(setParameterFromText(&unused, "LoopCheckFrames", "0"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sdf_tracker

@@ -1,0 +1,215 @@
+// The map as submaps along the path: merging maps (as they are and moved), the pipeline's submaps,
+// their handover, a search in all of them, and the parameters that set them.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "sdf_tracker/map/map_merge.h"
+#include "sdf_tracker/pipeline/parameters.h"
+#include "sdf_tracker/pipeline/pipeline.h"
+#include "sdf_tracker/sim/synthetic.h"
+#include "test_helpers.h"
+
+namespace sdf_tracker {
+namespace {
+
+VolumeConfig sparseLattice(double voxel_size_m = 0.02) {
+  VolumeConfig config;
+  config.type = MapType::kSparse;
+  config.voxel_size_m = voxel_size_m;
+  config.positive_truncation_m = 0.1;
+  return config;
+}
+
+/// Sets one voxel of a sparse map (allocating its block).
+void setVoxel(SparseTsdfMap* map, const Eigen::Vector3i& voxel, Voxel value) {
+  map->allocate(SparseTsdfMap::blockOf(voxel)).voxels[VoxelBlock::index(SparseTsdfMap::localOf(voxel))] = value;
+}
+
+TEST(MapMerge, PartsAtTheIdentityAddUpAsFusionWouldHave) {
+  SparseTsdfMap a(sparseLattice()), b(sparseLattice());
+  setVoxel(&a, {1, 1, 1}, {0.02f, 2.0f});
+  setVoxel(&b, {1, 1, 1}, {-0.01f, 1.0f});
+  setVoxel(&b, {20, 0, 0}, {0.05f, 4.0f});  // a block only b holds
+  const SparseTsdfMap merged = mergeMaps({{&a}, {&b}});
+  const Voxel shared = merged.voxel({1, 1, 1});
+  EXPECT_NEAR(shared.distance_m, (0.02 * 2.0 - 0.01 * 1.0) / 3.0, 1e-7);
+  EXPECT_EQ(shared.weight, 3.0f);
+  EXPECT_EQ(merged.voxel({20, 0, 0}).distance_m, 0.05f);
+  EXPECT_EQ(merged.voxel({20, 0, 0}).weight, 4.0f);
+  EXPECT_EQ(merged.voxel({2, 1, 1}).weight, 0.0f) << "a voxel neither observed stays unobserved";
+  EXPECT_EQ(merged.blockCount(), 2u);
+}
+
+TEST(MapMerge, AMovedPartIsResampledWhereItLies) {
+  // A field linear in space is what trilinear interpolation reproduces exactly, wherever the
+  // samples fall: the merged field must be that field moved.
+  SparseTsdfMap part(sparseLattice());
+  const Eigen::Vector3f normal = Eigen::Vector3f(0.3f, 0.2f, 0.9f).normalized();
+  auto field = [&](const Eigen::Vector3f& p) { return normal.dot(p) - 0.3f; };
+  for (int z = 0; z < 32; ++z) {
+    for (int y = 0; y < 32; ++y) {
+      for (int x = 0; x < 32; ++x) setVoxel(&part, {x, y, z}, {field(part.position(x, y, z)), 1.0f});
+    }
+  }
+  Eigen::Isometry3d T_target_part = Eigen::Isometry3d::Identity();
+  T_target_part.linear() = Eigen::AngleAxisd(0.2, Eigen::Vector3d(0.2, 1.0, 0.1).normalized()).toRotationMatrix();
+  T_target_part.translation() = Eigen::Vector3d(0.013, -0.021, 0.037);  // not whole voxels
+  const SparseTsdfMap merged = mergeMaps({{&part, T_target_part}});
+  const Eigen::Isometry3f T_part_target = T_target_part.inverse().cast<float>();
+  int checked = 0;
+  merged.forEachBlock([&](const SparseTsdfMap::BlockIndex& index, const VoxelBlock& block) {
+    for (int i = 0; i < kBlockVoxels; ++i) {
+      const Voxel& v = block.voxels[i];
+      if (v.weight <= 0.0f) continue;
+      const Eigen::Vector3i local(i % kBlockSide, (i / kBlockSide) % kBlockSide, i / (kBlockSide * kBlockSide));
+      const Eigen::Vector3f p_target = merged.position(SparseTsdfMap::firstVoxel(index) + local);
+      ASSERT_NEAR(v.distance_m, field(T_part_target * p_target), 2e-5) << "voxel at " << p_target.transpose();
+      ASSERT_NEAR(v.weight, 1.0f, 1e-5);
+      ++checked;
+    }
+  });
+  // The part's interior cube (31 cells a side) moved holds about that many voxels of the merge.
+  EXPECT_GT(checked, 25000);
+  EXPECT_LT(checked, 31 * 31 * 31 + 1);
+}
+
+TEST(MapMerge, RefusesPartsOnAnotherLatticeNamingThem) {
+  SparseTsdfMap a(sparseLattice(0.02)), b(sparseLattice(0.03));
+  EXPECT_THROW(mergeMaps({}), std::invalid_argument);
+  try {
+    mergeMaps({{&a}, {&b}});
+    FAIL() << "a part of 3 cm voxels was merged into one of 2 cm";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("part 1"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(mergeMaps({{&a}, {nullptr}}), std::invalid_argument);
+}
+
+constexpr double kFramePeriod_s = 1.0 / 30.0;
+constexpr double kDeskDuration_s = 10.0;
+
+/// The default preset (a sparse map) of 3 cm voxels, with submaps every `size_m`.
+PipelineConfig submapPipeline(double size_m, int handover_frames) {
+  PipelineConfig config = preset("default").pipeline;
+  config.volume.voxel_size_m = 0.03;
+  config.submaps.max_distance_m = size_m;
+  config.submaps.handover_frames = handover_frames;
+  return config;
+}
+
+/// Where the desk path is at frame i, in the tracker's world (the first camera's frame).
+Eigen::Isometry3d deskPose(int i) {
+  const Eigen::Isometry3d T_scene_W = synthetic::cameraPose(synthetic::Motion::kDesk, 0.0, kDeskDuration_s);
+  return T_scene_W.inverse() * synthetic::cameraPose(synthetic::Motion::kDesk, i * kFramePeriod_s, kDeskDuration_s);
+}
+DepthImage deskFrame(int i, const PinholeCamera& camera) {
+  return test::renderRoom(synthetic::cameraPose(synthetic::Motion::kDesk, i * kFramePeriod_s, kDeskDuration_s), camera);
+}
+
+TEST(Submaps, ANewSubmapStartsAlongThePathAndTracksAgainstTheOneBeforeFirst) {
+  constexpr int kHandover = 5, kFrames = 60;
+  const PinholeCamera camera = test::testCamera().scaledTo(160, 120);
+  SdfPipeline pipeline(submapPipeline(0.1, kHandover));
+  SdfPipeline one_map(submapPipeline(0.0, kHandover));
+  int started = 0, in_previous = 0;
+  double worst_m = 0.0, worst_one_map_m = 0.0;
+  for (int i = 0; i < kFrames; ++i) {
+    const DepthImage depth = deskFrame(i, camera);
+    const FrameReport report = pipeline.processFrame(depth, camera, i * kFramePeriod_s);
+    ASSERT_TRUE(report.track.ok()) << "frame " << i << ": " << report.track.message;
+    ASSERT_TRUE(one_map.processFrame(depth, camera, i * kFramePeriod_s).track.ok()) << i;
+    if (report.started_submap) {
+      ++started;
+      EXPECT_TRUE(report.fused) << "a submap starts with the frame that starts it";
+      EXPECT_GT((pipeline.activeSubmapAnchor().translation() - pipeline.closedSubmaps().back().place.T_W_anchor.translation())
+                    .norm(),
+                0.1)
+          << "frame " << i << " started a submap before the camera left the last";
+    }
+    in_previous += report.tracked_in_previous_submap;
+    worst_m = std::max(worst_m, (pipeline.pose().translation() - deskPose(i).translation()).norm());
+    worst_one_map_m = std::max(worst_one_map_m, (one_map.pose().translation() - deskPose(i).translation()).norm());
+  }
+  std::cout << "[ figures  ] " << pipeline.submapCount() << " submaps; worst position error " << worst_m * 1e3
+            << " mm (one map: " << worst_one_map_m * 1e3 << " mm)\n";
+  ASSERT_GE(started, 2) << "the desk path goes further than 0.2 m";
+  EXPECT_EQ(pipeline.submapCount(), static_cast<size_t>(started) + 1);
+  EXPECT_EQ(pipeline.closedSubmaps().front().place.T_W_anchor.matrix(), Eigen::Matrix4d::Identity())
+      << "the first submap starts at the first frame";
+  // The frame that starts a submap is tracked in the active one; the next kHandover - 1 in the
+  // one it closed (unless the sequence ends first).
+  EXPECT_LE(in_previous, started * (kHandover - 1));
+  EXPECT_GE(in_previous, (started - 1) * (kHandover - 1));
+  EXPECT_LT(worst_m, 2.0 * worst_one_map_m + 0.005) << "submaps made the path much worse than one map";
+
+  // The whole map is every submap's measurements in one: weights add up, nothing is lost.
+  double weight = test::totalWeight(pipeline.map());
+  for (const Submap& submap : pipeline.closedSubmaps()) weight += test::totalWeight(*submap.map);
+  EXPECT_NEAR(test::totalWeight(*pipeline.copyWholeMap()), weight, 1e-6 * weight);
+  EXPECT_GT(pipeline.mapMemoryBytes(), pipeline.map().memoryBytes());
+}
+
+TEST(Submaps, ACameraLostAndBackInAnOldSubmapIsFoundInTheWholeMap) {
+  PipelineConfig config = submapPipeline(0.1, 5);
+  config.relocalise = true;
+  SdfPipeline pipeline(config);
+  const PinholeCamera camera = test::testCamera().scaledTo(160, 120);
+  std::vector<Eigen::Isometry3d> tracked;
+  int i = 0;
+  for (; i < 60; ++i) {
+    ASSERT_TRUE(pipeline.processFrame(deskFrame(i, camera), camera, i * kFramePeriod_s).track.ok()) << i;
+    tracked.push_back(pipeline.pose());
+  }
+  ASSERT_GE(pipeline.closedSubmaps().size(), 2u);
+  const size_t submaps_before = pipeline.submapCount();
+  // The camera's pose is forgotten, and it views what the first submap holds: the search looks in
+  // every submap.
+  pipeline.relocalise();
+  int found_at = -1;
+  for (int k = 0; k < 30 && found_at < 0; ++k) {
+    const FrameReport report = pipeline.processFrame(deskFrame(2 + k % 3, camera), camera, (i + k) * kFramePeriod_s);
+    if (report.relocalisation.outcome == Relocaliser::Outcome::kAccepted) {
+      found_at = k;
+      EXPECT_TRUE(report.started_submap) << "found in the whole map: a new submap starts there";
+    }
+  }
+  ASSERT_GE(found_at, 0) << "not found in the merged submaps";
+  // Where the map has the view: where the camera was tracked to when it mapped it, within a voxel
+  // (the submaps that hold it drifted apart by as much).
+  EXPECT_LT((pipeline.pose().translation() - tracked[2 + found_at % 3].translation()).norm(), 0.02);
+  EXPECT_EQ(pipeline.submapCount(), submaps_before + 1);
+  const FrameReport next = pipeline.processFrame(deskFrame(3, camera), camera, (i + found_at + 1) * kFramePeriod_s);
+  EXPECT_TRUE(next.track.ok()) << next.track.message;
+  EXPECT_TRUE(next.tracked_in_previous_submap) << "the new submap's first frames track in the map the camera was found in";
+}
+
+TEST(Submaps, ParametersRefuseWhatSubmapsCannotDoYetByName) {
+  Settings dense = preset("default");
+  setParameterFromText(&dense, "MapType", "dense");
+  setParameterFromText(&dense, "SubmapSize", "2");
+  const std::vector<std::string> dense_errors = dense.validate();
+  ASSERT_EQ(dense_errors.size(), 1u);
+  EXPECT_EQ(dense_errors[0], "SubmapSize=2 applies to MapType=sparse only");
+
+  Settings swapping = preset("default");
+  setParameterFromText(&swapping, "SubmapSize", "2");
+  setParameterFromText(&swapping, "MaxMemoryMB", "64");
+  const std::vector<std::string> swap_errors = swapping.validate();
+  ASSERT_EQ(swap_errors.size(), 1u);
+  EXPECT_NE(swap_errors[0].find("SubmapSize=2 and MaxMemoryMB=64"), std::string::npos) << swap_errors[0];
+
+  Settings unused = preset("default");
+  setParameterFromText(&unused, "SubmapTurn", "30");
+  const std::vector<std::string> notes = unused.withoutEffect({"SubmapTurn"});
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("SubmapTurn=30 has no effect without SubmapSize"), std::string::npos) << notes[0];
+  EXPECT_THROW(setParameterFromText(&unused, "SubmapTurn", "0"), std::invalid_argument);
+  EXPECT_THROW(setParameterFromText(&unused, "SubmapHandoverFrames", "0"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace sdf_tracker
