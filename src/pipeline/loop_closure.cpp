@@ -132,7 +132,7 @@ LoopDetector::Step LoopDetector::step(const DepthImage& depth, const PinholeCame
   const bool plausible = offset.translation().norm() <= config_.search_radius_m &&
                          rotationAngle(offset) <= config_.search_angle_deg * kRadPerDeg;
   if (accepted && plausible) {
-    result.match = LoopMatch{search_submap_, found.T_W_C, found.track};
+    result.match = LoopMatch{search_submap_, found.T_W_C};
   } else if (accepted || search_frames_ >= config_.max_search_frames ||
              found.outcome == Relocaliser::Outcome::kAmbiguous) {
     result.message = accepted ? "found further from where the graph puts it than search_radius_m"

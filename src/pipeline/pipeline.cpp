@@ -145,7 +145,6 @@ void SdfPipeline::clearSubmaps() {
   loop_edges_.clear();
   solved_edges_ = 0;
   rejected_edges_.clear();
-  loops_closed_ = loops_rejected_ = 0;
 }
 
 void SdfPipeline::clearMap() {
@@ -449,23 +448,13 @@ void SdfPipeline::closeLoops(const DepthImage& filtered, const PinholeCamera& ca
 
 void SdfPipeline::applyGraphSolution(const BackgroundGraphSolver::Result& result, LoopReport* report) {
   const PoseGraphSolution& solution = result.solution;
-  const size_t solved_edges = result.graph.edges().size();
-  int kept = 0, kept_new = 0, rejected_new = 0;
-  for (size_t edge : loop_edges_) {
-    if (edge >= solved_edges) continue;
-    const bool wrong =
-        std::find(solution.rejected_loops.begin(), solution.rejected_loops.end(), static_cast<int>(edge)) !=
-        solution.rejected_loops.end();
-    kept += !wrong;
-    if (edge >= solved_edges_) (wrong ? rejected_new : kept_new) += 1;
-  }
-  solved_edges_ = solved_edges;
+  const size_t solved_before = solved_edges_;
+  solved_edges_ = result.graph.edges().size();
   rejected_edges_ = solution.rejected_loops;
-  loops_closed_ = kept;
-  loops_rejected_ += rejected_new;
+  for (size_t edge : loop_edges_) {
+    if (edge >= solved_before && edge < solved_edges_) (rejectedByTheGraph(edge) ? report->rejected : report->closed) += 1;
+  }
   report->solved = true;
-  report->closed = kept_new;
-  report->rejected = rejected_new;
   report->optimise_ms = result.solve_ms;
 
   const Eigen::Isometry3d active_before = active_.T_map_anchor();
@@ -492,14 +481,25 @@ void SdfPipeline::applyGraphSolution(const BackgroundGraphSolver::Result& result
   report->correction_deg = rotationAngle(moved) * 180.0 / M_PI;
 }
 
+bool SdfPipeline::rejectedByTheGraph(size_t edge) const {
+  return std::find(rejected_edges_.begin(), rejected_edges_.end(), static_cast<int>(edge)) != rejected_edges_.end();
+}
+
 std::vector<SdfPipeline::Loop> SdfPipeline::loops() const {
   std::vector<Loop> loops;
-  for (size_t edge : loop_edges_) {
-    const bool rejected = std::find(rejected_edges_.begin(), rejected_edges_.end(), static_cast<int>(edge)) !=
-                          rejected_edges_.end();
-    loops.push_back({graph_.edges()[edge], edge < solved_edges_ && !rejected});
-  }
+  for (size_t edge : loop_edges_) loops.push_back({graph_.edges()[edge], edge < solved_edges_ && !rejectedByTheGraph(edge)});
   return loops;
+}
+
+int SdfPipeline::loopsClosed() const {
+  const std::vector<Loop> all = loops();
+  return static_cast<int>(std::count_if(all.begin(), all.end(), [](const Loop& loop) { return loop.kept; }));
+}
+
+int SdfPipeline::loopsRejected() const {
+  return static_cast<int>(std::count_if(loop_edges_.begin(), loop_edges_.end(), [this](size_t edge) {
+    return edge < solved_edges_ && rejectedByTheGraph(edge);
+  }));
 }
 
 LoopReport SdfPipeline::finishLoopClosure() {

@@ -89,7 +89,9 @@ TEST(SyntheticSensor, ADepthBiasOutsideItsRangeIsRefusedNamingTheOptionAndTheVal
       const std::string message = e.what();
       EXPECT_NE(message.find("--depth-bias"), std::string::npos) << message;
       EXPECT_NE(message.find("[-0.1, 0.1]"), std::string::npos) << message;
-      if (bias == 0.2) EXPECT_NE(message.find("0.2"), std::string::npos) << message;
+      if (bias == 0.2) {
+        EXPECT_NE(message.find("0.2"), std::string::npos) << message;
+      }
     }
   }
   // A sequence refuses it too, before writing anything.

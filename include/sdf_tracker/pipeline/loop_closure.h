@@ -62,7 +62,6 @@ PoseInformation loopEdgeInformation(const LoopClosureConfig& config);
 struct LoopMatch {
   int submap = -1;                                          ///< index of the old submap
   Eigen::Isometry3d T_S_C = Eigen::Isometry3d::Identity();  ///< the camera in that submap's frame
-  TrackResult track;                                        ///< the frame tracked there
 };
 
 /// Looks for the camera's view in submaps that are not recent, where the pose graph places them

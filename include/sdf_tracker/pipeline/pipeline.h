@@ -229,9 +229,10 @@ class SdfPipeline {
     bool kept = false;
   };
   std::vector<Loop> loops() const;
-  /// Loops the latest solution kept, and every loop found wrong so far.
-  int loopsClosed() const { return loops_closed_; }
-  int loopsRejected() const { return loops_rejected_; }
+  /// Loops the latest solution kept, and those it found wrong (each solve weighs every loop
+  /// again).
+  int loopsClosed() const;
+  int loopsRejected() const;
   /// Waits for the pose graph's solve, if one runs or waits, and applies it: what a run's final
   /// trajectory and map must see. The report says what it kept and moved (solved = false: nothing
   /// was pending).
@@ -317,7 +318,9 @@ class SdfPipeline {
   /// Places every submap where a solution of the graph puts it (those started since it was
   /// handed over move with the newest it holds) and says so in `report`.
   void applyGraphSolution(const BackgroundGraphSolver::Result& result, LoopReport* report);
-  SubmapPlace& placeOf(int node) { return node == active_.node ? active_ : closed_submaps_.at(node).place; }
+  SubmapPlace& placeOf(int node) { return const_cast<SubmapPlace&>(submapPlace(node)); }
+  /// Whether the latest solution left loop edge `edge` (an index into the graph's edges) out.
+  bool rejectedByTheGraph(size_t edge) const;
 
   PipelineConfig config_;
   std::unique_ptr<TsdfMap> map_;
@@ -366,9 +369,7 @@ class SdfPipeline {
   /// submap, but is no loop found), and how many edges the last solution applied held.
   std::vector<size_t> loop_edges_;
   size_t solved_edges_ = 0;
-  std::vector<int> rejected_edges_;  ///< the latest solution's
-  int loops_closed_ = 0;
-  int loops_rejected_ = 0;
+  std::vector<int> rejected_edges_;  ///< the latest solution's rejected loops
   /// During a handover: the map frames are tracked against, the frames left, and whether they
   /// are fused into it too (the closed submap; not a search's merged copy).
   const TsdfMap* handover_map_ = nullptr;
