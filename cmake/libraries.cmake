@@ -18,7 +18,7 @@ target_include_directories(sdf_tracker_eigen SYSTEM INTERFACE ${EIGEN3_INCLUDE_D
 
 # The tracker: Eigen and OpenMP only.
 sdf_tracker_part(util SOURCES frame_memory memory se3 LINK sdf_tracker_eigen ${SDF_TRACKER_PARALLEL})
-sdf_tracker_part(camera SOURCES camera depth_image depth_undistortion sensor_model DEPENDS util)
+sdf_tracker_part(camera SOURCES camera colour_image depth_image depth_undistortion sensor_model DEPENDS util)
 sdf_tracker_part(map SOURCES block_swap map_merge sparse_tsdf_map tsdf_map tsdf_volume DEPENDS util)
 sdf_tracker_part(fusion SOURCES integrator DEPENDS camera map)
 sdf_tracker_part(tracking SOURCES motion_model tracker DEPENDS camera map)
@@ -31,8 +31,8 @@ sdf_tracker_part(graph SOURCES background_solver pose_graph DEPENDS util LINK Ce
 sdf_tracker_part(pipeline SOURCES loop_closure parameters pipeline submaps
   DEPENDS fusion tracking surface relocalisation graph)
 
-# Around the tracker: files (OpenCV for PNG only), the synthetic scenes, trajectory errors.
-sdf_tracker_part(io SOURCES depth_png files map_file mesh_file sdfmap_file trajectory_file tum_sequence vti_file
+# Around the tracker: files (OpenCV for images only), the synthetic scenes, trajectory errors.
+sdf_tracker_part(io SOURCES colour_image_file depth_png files map_file mesh_file sdfmap_file trajectory_file tum_sequence vti_file
   DEPENDS camera map surface places LINK ${OpenCV_LIBS})
 target_include_directories(sdf_tracker_io SYSTEM PRIVATE ${OpenCV_INCLUDE_DIRS})
 sdf_tracker_part(sim SOURCES relocalisation_cases synthetic wheel_odometry DEPENDS io)
@@ -58,6 +58,7 @@ set(SDF_TRACKER_UNIT_TEST_SOURCES
   ${SDF_TRACKER_TEST_DIR}/unit/test_integrator.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_tracker.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_io.cpp
+  ${SDF_TRACKER_TEST_DIR}/unit/test_colour.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_loop_closure.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_tum_sequence.cpp
   ${SDF_TRACKER_TEST_DIR}/unit/test_evaluation.cpp

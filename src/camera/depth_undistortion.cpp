@@ -37,4 +37,28 @@ DepthImage DepthUndistortion::apply(const DepthImage& distorted) const {
   return ideal;
 }
 
+void DepthUndistortion::apply(const ColourImage& distorted, ColourImage* ideal) const {
+  if (const std::string mismatch = camera_.sizeMismatch(distorted.width(), distorted.height()); !mismatch.empty()) {
+    throw std::invalid_argument(mismatch);
+  }
+  if (ideal->width() != camera_.width || ideal->height() != camera_.height) {
+    *ideal = ColourImage(camera_.width, camera_.height);
+  }
+  const uint8_t* in = distorted.data();
+  uint8_t* out = ideal->data();
+  const long n = static_cast<long>(source_index_.size());
+  // Part of every coloured frame's fusion: shared among the threads.
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < n; ++i) {
+    uint8_t* to = out + 3 * i;
+    const int32_t source = source_index_[static_cast<size_t>(i)];
+    if (source < 0) {
+      to[0] = to[1] = to[2] = 0;
+      continue;
+    }
+    const uint8_t* from = in + 3 * static_cast<size_t>(source);
+    to[0] = from[0], to[1] = from[1], to[2] = from[2];
+  }
+}
+
 }  // namespace sdf_tracker

@@ -31,6 +31,7 @@ std::vector<std::string> IntegratorConfig::validate() const {
   Violations v;
   v.requireNegative("negative_truncation_m", negative_truncation_m);
   v.requirePositive("max_weight", max_weight);
+  v.requireInRange("max_colour_weight", max_colour_weight, 1, 255);
   v.merge("noise.", noise.validate());
   return v.list();
 }
@@ -45,8 +46,10 @@ namespace {
 /// depth at the nearest pixel, and average the clamped distance in.
 class VoxelFusion {
  public:
-  VoxelFusion(const IntegratorConfig& config, const DepthImage& depth, const PinholeCamera& camera, float dmax)
+  VoxelFusion(const IntegratorConfig& config, const DepthImage& depth, const ColourImage* colour,
+              const PinholeCamera& camera, float dmax, float voxel_size)
       : depth_m_(depth.data()),
+        rgb_(colour ? colour->data() : nullptr),
         width_(camera.width),
         height_(camera.height),
         fx_(static_cast<float>(camera.fx)),
@@ -58,11 +61,17 @@ class VoxelFusion {
         wmax_(static_cast<float>(config.max_weight)),
         sensor_weights_(config.weighting == MeasurementWeighting::kSensorNoise),
         noise_(config.noise),
-        reference_sigma_(config.noise.referenceSigma()) {}
+        reference_sigma_(config.noise.referenceSigma()),
+        colour_band_(kColourBandVoxels * voxel_size),
+        max_colour_weight_(config.max_colour_weight) {}
 
-  /// Fuses the measurement seen through voxel centre p_C (camera frame) into `voxel`; false when
-  /// the voxel is outside the image, has no measurement, or lies too far behind the surface.
-  bool fuse(const Eigen::Vector3f& p_C, Voxel* voxel) const {
+  /// Whether fuse() is given colours to update.
+  bool inColour() const { return rgb_ != nullptr; }
+
+  /// Fuses the measurement seen through voxel centre p_C (camera frame) into `voxel`, and its
+  /// pixel's colour into `colour` (when given) if the voxel lies near the surface; false when the
+  /// voxel is outside the image, has no measurement, or lies too far behind the surface.
+  bool fuse(const Eigen::Vector3f& p_C, Voxel* voxel, VoxelColour* colour) const {
     if (p_C.z() <= 0.0f) return false;
     const float inv_z = 1.0f / p_C.z();
     // Nearest pixel; the range test comes before the conversion so rounding is exact.
@@ -70,7 +79,8 @@ class VoxelFusion {
     const float v_shifted = fy_ * p_C.y() * inv_z + cy_ + 0.5f;
     if (!(u_shifted >= 0.0f && v_shifted >= 0.0f && u_shifted < width_ && v_shifted < height_)) return false;
     const int u = static_cast<int>(u_shifted), v = static_cast<int>(v_shifted);
-    const float z_measured = depth_m_[static_cast<size_t>(v) * width_ + u];
+    const size_t pixel = static_cast<size_t>(v) * width_ + u;
+    const float z_measured = depth_m_[pixel];
     if (!DepthImage::isMeasurement(z_measured)) return false;
     const float d = z_measured - p_C.z();
     if (d < dmin_) return false;
@@ -79,18 +89,42 @@ class VoxelFusion {
     const float w_sum = voxel->weight + w_new;
     voxel->distance_m = (voxel->distance_m * voxel->weight + d_clamped * w_new) / w_sum;
     voxel->weight = std::min(w_sum, wmax_);
+    if (colour && std::fabs(d) <= colour_band_) fuseColour(rgb_ + 3 * pixel, colour);
     return true;
   }
 
  private:
   const float* depth_m_;
+  const uint8_t* rgb_;  ///< the colour image, or null
   int width_, height_;
   float fx_, fy_, cx_, cy_;
   float dmax_, dmin_, wmax_;
   bool sensor_weights_;
   const DepthNoiseModel& noise_;
   float reference_sigma_;
+  float colour_band_;
+  int max_colour_weight_;
+
+  /// The running average, one observation of weight 1, rounded to the nearest level.
+  void fuseColour(const uint8_t* rgb, VoxelColour* colour) const {
+    const int w = colour->weight;
+    const float share = kShareOfNext[w];  // 1 / (w + 1), without a division per voxel
+    const auto mix = [share](uint8_t old, uint8_t seen) {
+      return static_cast<uint8_t>(static_cast<float>(old) + static_cast<float>(seen - old) * share + 0.5f);
+    };
+    colour->r = mix(colour->r, rgb[0]);
+    colour->g = mix(colour->g, rgb[1]);
+    colour->b = mix(colour->b, rgb[2]);
+    colour->weight = static_cast<uint8_t>(std::min(w + 1, max_colour_weight_));
+  }
+  static const std::array<float, 256> kShareOfNext;
 };
+
+const std::array<float, 256> VoxelFusion::kShareOfNext = [] {
+  std::array<float, 256> share{};
+  for (int w = 0; w < 256; ++w) share[w] = 1.0f / static_cast<float>(w + 1);
+  return share;
+}();
 
 /// The dense grid: each row of voxels is clipped to the viewing frustum, then fused voxel by voxel.
 size_t integrateDense(const VoxelFusion& fusion, const PinholeCamera& camera, const Eigen::Isometry3f& T_C_W,
@@ -122,9 +156,10 @@ size_t integrateDense(const VoxelFusion& fusion, const PinholeCamera& camera, co
         const int i_end = std::min(dims.x(), static_cast<int>(std::floor(hi)) + 2);
         Eigen::Vector3f p_C = p0_C + static_cast<float>(i_begin) * step_x_C;
         auto* row = voxels + volume->index(0, j, k);
+        VoxelColour* colours = fusion.inColour() ? volume->colours() + volume->index(0, j, k) : nullptr;
         for (int i = i_begin; i < i_end; ++i, p_C += step_x_C) {
           Voxel voxel = codec.decode(row[i]);
-          if (!fusion.fuse(p_C, &voxel)) continue;
+          if (!fusion.fuse(p_C, &voxel, colours ? colours + i : nullptr)) continue;
           row[i] = codec.encode(voxel);
           ++updated;
         }
@@ -248,11 +283,15 @@ size_t integrateSparse(const VoxelFusion& fusion, const DepthImage& depth, const
     VoxelBlock& block = *visible[n].second;
     size_t block_updated = 0;
     Voxel* voxel = block.voxels.data();
+    VoxelColour* colour = fusion.inColour() ? block.colours.data() : nullptr;
     for (int z = 0; z < kBlockSide; ++z) {
       for (int y = 0; y < kBlockSide; ++y) {
         Eigen::Vector3f p_C = visible[n].first + step_C.col(2) * static_cast<float>(z) +
                               step_C.col(1) * static_cast<float>(y);
-        for (int x = 0; x < kBlockSide; ++x, p_C += step_C.col(0), ++voxel) block_updated += fusion.fuse(p_C, voxel);
+        for (int x = 0; x < kBlockSide; ++x, p_C += step_C.col(0), ++voxel) {
+          block_updated += fusion.fuse(p_C, voxel, colour);
+          if (colour) ++colour;
+        }
       }
     }
     if (block_updated > 0) block.changed_at = revision;
@@ -268,15 +307,21 @@ size_t integrateSparse(const VoxelFusion& fusion, const DepthImage& depth, const
 }  // namespace
 
 size_t Integrator::integrate(const DepthImage& depth, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C,
-                             TsdfMap* map) const {
+                             TsdfMap* map, const ColourImage* colour) const {
   if (const std::string mismatch = camera.sizeMismatch(depth.width(), depth.height()); !mismatch.empty()) {
     throw std::invalid_argument(mismatch);
+  }
+  if (colour) {
+    if (const std::string mismatch = colour->sizeMismatch(depth.width(), depth.height()); !mismatch.empty()) {
+      throw std::invalid_argument(mismatch);
+    }
   }
   // Beyond the furthest measurement (plus the negative band) every voxel is too far behind.
   const float max_depth_m = depth.maxMeasurement();
   if (max_depth_m <= 0.0f) return 0;
   const double z_far = max_depth_m - config_.negative_truncation_m;
-  const VoxelFusion fusion(config_, depth, camera, map->positiveTruncation());
+  if (colour) map->enableColour();
+  const VoxelFusion fusion(config_, depth, colour, camera, map->positiveTruncation(), map->voxelSize());
   if (map->type() == MapType::kSparse) {
     return integrateSparse(fusion, depth, camera, T_W_C, static_cast<float>(config_.negative_truncation_m),
                            static_cast<float>(z_far), static_cast<SparseTsdfMap*>(map));

@@ -63,6 +63,12 @@ std::unique_ptr<TsdfMap> readMap(const std::string& path, bool compact_voxels, s
   failUnknownMapExtension(path);
 }
 
+std::string describeLoadedColour(const TsdfMap& map, bool colour_on) {
+  if (!colour_on || map.holdsColour()) return "";
+  return "holds no colour (a .sdfmap before format version 4, or a map made without colour): what it holds shows "
+         "grey until the camera sees it in colour";
+}
+
 std::string describeLoadedPlaces(const PlaceMemory* places, bool relocalise) {
   std::string held;
   if (!places) held = "holds no place memory (a .vti, or a .sdfmap of format version 1)";

@@ -30,10 +30,11 @@ class Fnv1a {
 };
 
 constexpr char kMapMagic[8] = {'S', 'D', 'F', 'T', 'M', 'A', 'P', '\n'};
-constexpr uint32_t kMapVersion = 3;
+constexpr uint32_t kMapVersion = 4;
 constexpr uint32_t kFirstMapVersion = 1;  ///< no place memory
 constexpr uint32_t kPlacesVersion = 2;    ///< from this version on: the place memory
 constexpr uint32_t kMapFrameVersion = 3;  ///< from this version on: the map frame
+constexpr uint32_t kColourVersion = 4;    ///< from this version on: the colour flag (and colours)
 
 /// The header of a .sdfmap file, field by field as stored.
 #pragma pack(push, 1)
@@ -70,10 +71,17 @@ struct MapFrameRecord {
   uint64_t known;  ///< 1: T_map_W holds the map frame; 0: none was saved
   KeyframePose T_map_W;
 };
+/// Version 4's colour flag, right after MapFrameRecord: 1 when every block's record is followed
+/// by a colour per voxel.
+struct ColourRecord {
+  uint64_t holds_colour;
+};
 #pragma pack(pop)
 static_assert(sizeof(MapFileHeader) == 64 && sizeof(PlacesHeader) == 48 && sizeof(KeyframePose) == 56 &&
-                  sizeof(MapFrameRecord) == 64 && sizeof(Voxel) == 8,
+                  sizeof(MapFrameRecord) == 64 && sizeof(ColourRecord) == 8 && sizeof(Voxel) == 8 &&
+                  sizeof(VoxelColour) == 4,
               "the .sdfmap layout is fixed");
+constexpr size_t kBlockColourBytes = kBlockVoxels * sizeof(VoxelColour);
 
 KeyframePose poseRecordOf(const Eigen::Isometry3d& T) {
   KeyframePose pose;
@@ -151,6 +159,7 @@ void writeSparseMap(const std::string& path, const SparseTsdfMap& map, const Pla
   MapFrameRecord map_frame{};
   map_frame.known = T_map_W ? 1 : 0;
   map_frame.T_map_W = poseRecordOf(T_map_W.value_or(Eigen::Isometry3d::Identity()));
+  const ColourRecord colour{map.holdsColour() ? 1u : 0u};
 
   AtomicOutput out(path);
   Fnv1a hash;
@@ -161,12 +170,14 @@ void writeSparseMap(const std::string& path, const SparseTsdfMap& map, const Pla
   put(&header, sizeof(header));
   put(&places_header, sizeof(places_header));
   put(&map_frame, sizeof(map_frame));
+  put(&colour, sizeof(colour));
   auto record = std::make_unique<MapFileBlock>();
   for (const SparseTsdfMap::BlockIndex& index : indices) {
     for (int axis = 0; axis < 3; ++axis) record->index[axis] = index[axis];
     const VoxelBlock& block = *map.find(index);
     std::copy(block.voxels.begin(), block.voxels.end(), record->voxels);
     put(record.get(), sizeof(MapFileBlock));
+    if (colour.holds_colour) put(block.colours.data(), kBlockColourBytes);
   }
   if (places) {
     for (const Keyframe& keyframe : places->keyframes()) {
@@ -240,10 +251,23 @@ SparseTsdfMap readSparseMap(const std::string& path, std::optional<SavedPlaces>*
       }
     }
   }
+  // Version 4: whether colours follow the blocks.
+  ColourRecord colour{0};
+  const bool has_colour_flag = header.version >= kColourVersion;
+  if (has_colour_flag) {
+    if (file_bytes < sizeof(header) + sizeof(places_header) + sizeof(map_frame) + sizeof(colour) ||
+        !in.read(reinterpret_cast<char*>(&colour), sizeof(colour))) {
+      throwFileError(path, "truncated in the colour flag");
+    }
+    hash.add(&colour, sizeof(colour));
+    if (colour.holds_colour > 1) {
+      throwFileError(path, "colour flag " + std::to_string(colour.holds_colour) + " is neither 0 nor 1");
+    }
+  }
   // The length must match the counts exactly before anything is allocated for blocks or keyframes.
-  const uint64_t block_bytes = sizeof(MapFileBlock);
-  const uint64_t headers =
-      sizeof(header) + (has_places ? sizeof(places_header) : 0) + (has_map_frame ? sizeof(map_frame) : 0);
+  const uint64_t block_bytes = sizeof(MapFileBlock) + (colour.holds_colour ? kBlockColourBytes : 0);
+  const uint64_t headers = sizeof(header) + (has_places ? sizeof(places_header) : 0) +
+                           (has_map_frame ? sizeof(map_frame) : 0) + (has_colour_flag ? sizeof(colour) : 0);
   const uint64_t payload = file_bytes - headers;
   // In 64 bits the sum may wrap for counts no file could hold: say so rather than a wrong size.
   const uint64_t limit = UINT64_MAX / 4;
@@ -262,6 +286,7 @@ SparseTsdfMap readSparseMap(const std::string& path, std::optional<SavedPlaces>*
   }
 
   SparseTsdfMap map(config);
+  if (colour.holds_colour) map.enableColour();
   auto record = std::make_unique<MapFileBlock>();
   try {
     for (uint64_t b = 0; b < header.block_count; ++b) {
@@ -278,7 +303,14 @@ SparseTsdfMap readSparseMap(const std::string& path, std::optional<SavedPlaces>*
         const std::string problem = voxelProblem(record->voxels[v], config.positive_truncation_m);
         if (!problem.empty()) throwFileError(path, where.str() + ", voxel " + std::to_string(v) + ": " + problem);
       }
-      std::copy(record->voxels, record->voxels + kBlockVoxels, map.allocate(index).voxels.begin());
+      VoxelBlock& block = map.allocate(index);
+      std::copy(record->voxels, record->voxels + kBlockVoxels, block.voxels.begin());
+      if (colour.holds_colour) {
+        if (!in.read(reinterpret_cast<char*>(block.colours.data()), kBlockColourBytes)) {
+          throwFileError(path, "read failed in the colours of block " + std::to_string(b));
+        }
+        hash.add(block.colours.data(), kBlockColourBytes);
+      }
     }
   } catch (const std::bad_alloc&) {
     throwFileError(path, "not enough memory for its " + std::to_string(header.block_count) + " blocks");

@@ -1,12 +1,16 @@
 #include "sdf_tracker/io/tum_sequence.h"
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 #include <sys/stat.h>
 
+#include "sdf_tracker/io/colour_image_file.h"
 #include "sdf_tracker/io/depth_png.h"
 
 namespace sdf_tracker {
@@ -44,6 +48,51 @@ bool readIntrinsicsFile(const std::string& path, PinholeCamera* camera, double* 
 
 }  // namespace
 
+std::vector<TimedLine> readTimedList(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open");
+  std::vector<TimedLine> lines;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    TimedLine timed;
+    if (!(fields >> timed.timestamp_s) || !std::isfinite(timed.timestamp_s)) {
+      throw std::runtime_error(path + ": line " + std::to_string(number) + " does not start with a timestamp: \"" +
+                               line + "\"");
+    }
+    std::getline(fields >> std::ws, timed.rest);
+    lines.push_back(std::move(timed));
+  }
+  return lines;
+}
+
+std::vector<long> associateByTime(const std::vector<double>& a, const std::vector<double>& b, double max_difference_s) {
+  // Every pair within reach (b sorted by time for the search), closest first; ties in list order.
+  std::vector<size_t> b_order(b.size());
+  for (size_t j = 0; j < b.size(); ++j) b_order[j] = j;
+  std::sort(b_order.begin(), b_order.end(), [&b](size_t x, size_t y) { return b[x] < b[y]; });
+  std::vector<std::tuple<double, size_t, size_t>> pairs;  // |difference|, index in a, index in b
+  for (size_t i = 0; i < a.size(); ++i) {
+    auto first = std::lower_bound(b_order.begin(), b_order.end(), a[i] - max_difference_s,
+                                  [&b](size_t j, double t) { return b[j] < t; });
+    for (auto it = first; it != b_order.end() && b[*it] <= a[i] + max_difference_s; ++it) {
+      pairs.emplace_back(std::fabs(a[i] - b[*it]), i, *it);
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<long> partner(a.size(), -1);
+  std::vector<char> taken(b.size(), 0);
+  for (const auto& [difference, i, j] : pairs) {
+    if (partner[i] >= 0 || taken[j]) continue;
+    partner[i] = static_cast<long>(j);
+    taken[j] = 1;
+  }
+  return partner;
+}
+
 TumSequence TumSequence::open(const std::string& directory, const SequenceOptions& options) {
   TumSequence sequence;
   const std::string list_path = directory + "/depth.txt";
@@ -69,6 +118,29 @@ TumSequence TumSequence::open(const std::string& directory, const SequenceOption
     sequence.frames_.push_back(frame);
   }
   if (sequence.frames_.empty()) throw std::runtime_error(list_path + ": lists no depth frames");
+
+  const std::string colour_list_path = directory + "/rgb.txt";
+  if (fileExists(colour_list_path)) {
+    sequence.has_colour_list_ = true;
+    const std::vector<TimedLine> colour = readTimedList(colour_list_path);
+    std::vector<double> depth_times, colour_times;
+    for (const Frame& frame : sequence.frames_) depth_times.push_back(frame.timestamp_s);
+    for (const TimedLine& entry : colour) colour_times.push_back(entry.timestamp_s);
+    const std::vector<long> partner = associateByTime(depth_times, colour_times, kMaxColourGap_s);
+    for (size_t i = 0; i < partner.size(); ++i) {
+      if (partner[i] < 0) continue;
+      const TimedLine& entry = colour[static_cast<size_t>(partner[i])];
+      std::istringstream words(entry.rest);
+      std::string relative;
+      words >> relative;
+      if (relative.empty()) {
+        throw std::runtime_error(colour_list_path + ": the line of timestamp " + std::to_string(entry.timestamp_s) +
+                                 " names no image");
+      }
+      sequence.frames_[i].colour_path = directory + "/" + relative;
+      sequence.frames_[i].colour_timestamp_s = entry.timestamp_s;
+    }
+  }
 
   // TUM's downloads carry no intrinsics file; their folder's name says which camera took them, and
   // so which calibration TUM publishes for them, lens distortion included.
@@ -132,6 +204,17 @@ DepthImage TumSequence::depth(size_t i) const {
     throw std::runtime_error(msg.str());
   }
   return image;
+}
+
+size_t TumSequence::colouredFrames() const {
+  return static_cast<size_t>(
+      std::count_if(frames_.begin(), frames_.end(), [](const Frame& frame) { return !frame.colour_path.empty(); }));
+}
+
+std::optional<ColourImage> TumSequence::colour(size_t i) const {
+  const std::string& path = colourPath(i);
+  if (path.empty()) return std::nullopt;
+  return io::readColourImage(path, camera_.width, camera_.height);
 }
 
 }  // namespace sdf_tracker

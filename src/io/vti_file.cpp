@@ -46,9 +46,12 @@ void writeVti(const std::string& path, const TsdfVolume& volume) {
   const Eigen::Vector3i d = volume.dims();
   const Eigen::Vector3d o = volume.config().origin_W;
   const uint64_t array_bytes = volume.voxelCount() * sizeof(float);
+  const bool coloured = volume.holdsColour();
+  const uint64_t colour_bytes = coloured ? volume.voxelCount() * 3 : 0, colour_weight_bytes = colour_bytes / 3;
   // Both before the file is opened: a grid too large for the memory or the disk is refused by name.
   requireMemory(array_bytes, "writing " + path);
-  requireFreeSpace(path, 2 * array_bytes, "the grid's " + std::to_string(volume.voxelCount()) + " voxels");
+  requireFreeSpace(path, 2 * array_bytes + colour_bytes + colour_weight_bytes,
+                   "the grid's " + std::to_string(volume.voxelCount()) + " voxels");
   AtomicOutput out(path);
   std::ostream& s = out.stream();
   s << std::setprecision(17);
@@ -65,8 +68,15 @@ void writeVti(const std::string& path, const TsdfVolume& volume) {
     << "      <PointData Scalars=\"distance\">\n"
     << "        <DataArray type=\"Float32\" Name=\"distance\" format=\"appended\" offset=\"0\"/>\n"
     << "        <DataArray type=\"Float32\" Name=\"weight\" format=\"appended\" offset=\""
-    << array_bytes + sizeof(uint64_t) << "\"/>\n"
-    << "      </PointData>\n    </Piece>\n  </ImageData>\n  <AppendedData encoding=\"raw\">\n   _";
+    << array_bytes + sizeof(uint64_t) << "\"/>\n";
+  // Colour as ParaView shows it (colour by "colour", Map Scalars off), and its weight.
+  if (coloured) {
+    s << "        <DataArray type=\"UInt8\" Name=\"colour\" NumberOfComponents=\"3\" format=\"appended\" offset=\""
+      << 2 * (array_bytes + sizeof(uint64_t)) << "\"/>\n"
+      << "        <DataArray type=\"UInt8\" Name=\"colour_weight\" format=\"appended\" offset=\""
+      << 2 * (array_bytes + sizeof(uint64_t)) + colour_bytes + sizeof(uint64_t) << "\"/>\n";
+  }
+  s << "      </PointData>\n    </Piece>\n  </ImageData>\n  <AppendedData encoding=\"raw\">\n   _";
   std::vector<float> buffer(volume.voxelCount());
   for (int field = 0; field < 2; ++field) {
     for (size_t i = 0; i < buffer.size(); ++i) {
@@ -75,6 +85,18 @@ void writeVti(const std::string& path, const TsdfVolume& volume) {
     }
     writeBinary(s, array_bytes);
     s.write(reinterpret_cast<const char*>(buffer.data()), static_cast<std::streamsize>(array_bytes));
+  }
+  if (coloured) {
+    std::vector<uint8_t> rgb(colour_bytes), weights(colour_weight_bytes);
+    for (size_t i = 0; i < weights.size(); ++i) {
+      const VoxelColour c = volume.colour(i);
+      rgb[3 * i] = c.r, rgb[3 * i + 1] = c.g, rgb[3 * i + 2] = c.b;
+      weights[i] = c.weight;
+    }
+    writeBinary(s, colour_bytes);
+    s.write(reinterpret_cast<const char*>(rgb.data()), static_cast<std::streamsize>(colour_bytes));
+    writeBinary(s, colour_weight_bytes);
+    s.write(reinterpret_cast<const char*>(weights.data()), static_cast<std::streamsize>(colour_weight_bytes));
   }
   s << "\n  </AppendedData>\n</VTKFile>\n";
   out.commit();
@@ -125,13 +147,18 @@ TsdfVolume readVti(const std::string& path, bool compact_voxels) {
   const uint64_t voxel_count = static_cast<uint64_t>(config.dims.x()) * config.dims.y() * config.dims.z();
   const uint64_t array_bytes = voxel_count * sizeof(float);
   const uint64_t data_start = underscore + 1;
-  if (file_bytes < data_start || file_bytes - data_start < 2 * (sizeof(uint64_t) + array_bytes)) {
+  // A colour array (this writer's, after the two float arrays) when the header names one.
+  const bool coloured = header.find("Name=\"colour\"") != std::string::npos;
+  const uint64_t colour_data = coloured ? 2 * sizeof(uint64_t) + 4 * voxel_count : 0;
+  const uint64_t data_bytes = 2 * (sizeof(uint64_t) + array_bytes) + colour_data;
+  if (file_bytes < data_start || file_bytes - data_start < data_bytes) {
     throwFileError(path, "file is truncated: its header describes " + std::to_string(config.dims.x()) + "x" +
-                   std::to_string(config.dims.y()) + "x" + std::to_string(config.dims.z()) + " voxels (" +
-                   std::to_string(2 * array_bytes) + " bytes of data) but it holds " +
+                   std::to_string(config.dims.y()) + "x" + std::to_string(config.dims.z()) + " voxels" +
+                   (coloured ? " in colour" : "") + " (" + std::to_string(data_bytes) + " bytes of data) but it holds " +
                    std::to_string(file_bytes > data_start ? file_bytes - data_start : 0) + " bytes after the header");
   }
-  requireMemory(voxel_count * (2 * sizeof(float) + (compact_voxels ? sizeof(CompactVoxel) : sizeof(Voxel))),
+  requireMemory(voxel_count * (2 * sizeof(float) + (compact_voxels ? sizeof(CompactVoxel) : sizeof(Voxel)) +
+                               (coloured ? 4 + sizeof(VoxelColour) : 0)),
                 path + ": its " + std::to_string(voxel_count) + " voxels");
   try {
     TsdfVolume volume(config);
@@ -154,6 +181,23 @@ TsdfVolume readVti(const std::string& path, bool compact_voxels) {
       const std::string problem = voxelProblem(voxel, config.positive_truncation_m);
       if (!problem.empty()) throwFileError(path, "voxel " + std::to_string(i) + ": " + problem);
       volume.setVoxel(i, voxel);
+    }
+    if (coloured) {
+      std::vector<uint8_t> rgb(3 * voxel_count), weights(voxel_count);
+      for (std::vector<uint8_t>* target : {&rgb, &weights}) {
+        uint64_t bytes = 0;
+        in.read(reinterpret_cast<char*>(&bytes), sizeof(bytes));
+        if (bytes != target->size()) {
+          throwFileError(path, std::string(target == &rgb ? "the colour" : "the colour weight") + " array holds " +
+                                   std::to_string(bytes) + " bytes, expected " + std::to_string(target->size()));
+        }
+        in.read(reinterpret_cast<char*>(target->data()), static_cast<std::streamsize>(bytes));
+        if (!in) throwFileError(path, "file is truncated inside the colour data");
+      }
+      volume.enableColour();
+      for (size_t i = 0; i < voxel_count; ++i) {
+        volume.setColour(i, VoxelColour{rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2], weights[i]});
+      }
     }
     return volume;
   } catch (const std::bad_alloc&) {

@@ -42,10 +42,14 @@ void BlockSwapFile::put(uint64_t key, const VoxelBlock& block) {
   } else {
     record = records_;
   }
-  char bytes[kRecordBytes];
-  std::memcpy(bytes, block.voxels.data(), sizeof(block.voxels));
-  std::memcpy(bytes + sizeof(block.voxels), &block.changed_at, sizeof(block.changed_at));
-  const ssize_t written = ::pwrite(fd_, bytes, kRecordBytes, static_cast<off_t>(record * kRecordBytes));
+  std::vector<char> bytes(kRecordBytes, 0);
+  char* at = bytes.data();
+  std::memcpy(at, block.voxels.data(), sizeof(block.voxels));
+  std::memcpy(at += sizeof(block.voxels), &block.changed_at, sizeof(block.changed_at));
+  const uint64_t has_colour = block.colours.size() == static_cast<size_t>(kBlockVoxels) ? 1 : 0;
+  std::memcpy(at += sizeof(block.changed_at), &has_colour, sizeof(has_colour));
+  if (has_colour) std::memcpy(at + sizeof(has_colour), block.colours.data(), kColourBytes);
+  const ssize_t written = ::pwrite(fd_, bytes.data(), kRecordBytes, static_cast<off_t>(record * kRecordBytes));
   if (written != static_cast<ssize_t>(kRecordBytes)) {
     if (written >= 0) errno = ENOSPC;  // a short write: the disk filled up
     throw swapError("cannot write a block", directory_);
@@ -59,14 +63,23 @@ void BlockSwapFile::put(uint64_t key, const VoxelBlock& block) {
 bool BlockSwapFile::read(uint64_t key, VoxelBlock* block) const {
   const auto it = record_of_.find(key);
   if (it == record_of_.end()) return false;
-  char bytes[kRecordBytes];
-  const ssize_t got = ::pread(fd_, bytes, kRecordBytes, static_cast<off_t>(it->second * kRecordBytes));
+  std::vector<char> bytes(kRecordBytes);
+  const ssize_t got = ::pread(fd_, bytes.data(), kRecordBytes, static_cast<off_t>(it->second * kRecordBytes));
   if (got != static_cast<ssize_t>(kRecordBytes)) {
     if (got >= 0) errno = EIO;
     throw swapError("cannot read a block back", directory_);
   }
-  std::memcpy(block->voxels.data(), bytes, sizeof(block->voxels));
-  std::memcpy(&block->changed_at, bytes + sizeof(block->voxels), sizeof(block->changed_at));
+  const char* at = bytes.data();
+  std::memcpy(block->voxels.data(), at, sizeof(block->voxels));
+  std::memcpy(&block->changed_at, at += sizeof(block->voxels), sizeof(block->changed_at));
+  uint64_t has_colour = 0;
+  std::memcpy(&has_colour, at += sizeof(block->changed_at), sizeof(has_colour));
+  if (has_colour) {
+    block->colours.resize(kBlockVoxels);
+    std::memcpy(block->colours.data(), at + sizeof(has_colour), kColourBytes);
+  } else {
+    block->colours.clear();
+  }
   return true;
 }
 
@@ -130,7 +143,7 @@ size_t MapMemoryBudget::restore(SparseTsdfMap* map, const BlockBox& box) {
       throw;
     }
     block.changed_at = revision;
-    map->allocate(wanted[n]) = block;
+    map->insert(wanted[n], block);
     swap_.erase(key);
   }
   return wanted.size();
@@ -188,7 +201,11 @@ std::string MapMemoryBudget::takeOverrunWarning(const SparseTsdfMap& map) {
 
 SparseTsdfMap MapMemoryBudget::whole(const SparseTsdfMap& map) const {
   SparseTsdfMap copy = map;
-  for (uint64_t key : swap_.keys()) swap_.read(key, &copy.allocate(SparseTsdfMap::indexOf(key)));
+  VoxelBlock block;
+  for (uint64_t key : swap_.keys()) {
+    swap_.read(key, &block);
+    copy.insert(SparseTsdfMap::indexOf(key), block);
+  }
   return copy;
 }
 

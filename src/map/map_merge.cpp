@@ -18,15 +18,28 @@ void accumulate(const Voxel& voxel, Voxel* into) {
   into->weight = weight;
 }
 
+/// Adds a colour seen `colour.weight` times to `into`: their weighted average, the weight their
+/// sum up to the most a voxel's colour holds.
+void accumulate(const VoxelColour& colour, VoxelColour* into) {
+  if (colour.weight == 0) return;
+  const int w0 = into->weight, w1 = colour.weight, w = w0 + w1;
+  const auto mix = [&](uint8_t a, uint8_t b) { return static_cast<uint8_t>((a * w0 + b * w1 + w / 2) / w); };
+  *into = {mix(into->r, colour.r), mix(into->g, colour.g), mix(into->b, colour.b),
+           static_cast<uint8_t>(std::min(w, 255))};
+}
+
 /// The part's voxels as they are (a part at the identity).
 void addAsIs(const SparseTsdfMap& part, SparseTsdfMap* merged) {
   part.forEachBlock([&](const SparseTsdfMap::BlockIndex& index, const VoxelBlock& block) {
     VoxelBlock* into = merged->find(index);
     if (into == nullptr) {
-      merged->allocate(index).voxels = block.voxels;
+      merged->insert(index, block);
       return;
     }
     for (int i = 0; i < kBlockVoxels; ++i) accumulate(block.voxels[i], &into->voxels[i]);
+    if (!block.colours.empty()) {
+      for (int i = 0; i < kBlockVoxels; ++i) accumulate(block.colours[i], &into->colours[i]);
+    }
   });
 }
 
@@ -87,7 +100,15 @@ void addMoved(const PlacedMap& placed, SparseTsdfMap* merged) {
       for (int y = 0; y < kBlockSide; ++y) {
         for (int x = 0; x < kBlockSide; ++x) {
           const Eigen::Vector3f p_part = T_part_target * merged->position(first + Eigen::Vector3i(x, y, z));
-          accumulate(resample(part, part.toLattice(p_part)), &blocks[i]->voxels[VoxelBlock::index(x, y, z)]);
+          const Eigen::Vector3f lattice = part.toLattice(p_part);
+          const int local = VoxelBlock::index(x, y, z);
+          const Voxel resampled = resample(part, lattice);
+          accumulate(resampled, &blocks[i]->voxels[local]);
+          // Colour from the nearest voxel: it is not blended across an edge between two colours.
+          if (part.holdsColour() && resampled.weight > 0.0f) {
+            const Eigen::Vector3f nearest = (lattice.array() + 0.5f).floor();
+            accumulate(part.colour(nearest.cast<int>()), &blocks[i]->colours[local]);
+          }
         }
       }
     }
@@ -117,6 +138,9 @@ SparseTsdfMap mergeMaps(const std::vector<PlacedMap>& parts) {
     }
   }
   SparseTsdfMap merged(parts[0].map->config());
+  if (std::any_of(parts.begin(), parts.end(), [](const PlacedMap& part) { return part.map->holdsColour(); })) {
+    merged.enableColour();
+  }
   const uint64_t revision = merged.beginRevision();
   for (const PlacedMap& part : parts) {
     if (part.T_target_map.matrix() == Eigen::Matrix4d::Identity()) {

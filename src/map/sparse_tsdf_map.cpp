@@ -21,8 +21,25 @@ VoxelBlock& SparseTsdfMap::allocate(const BlockIndex& block) {
   return blocks_.findOrInsert(keyOf(block), [this] {
     auto fresh = std::make_unique<VoxelBlock>();
     fresh->voxels.fill(Voxel{positive_truncation_, 0.0f});
+    if (holds_colour_) fresh->colours.assign(kBlockVoxels, VoxelColour{});
     return fresh;
   });
+}
+
+void SparseTsdfMap::insert(const BlockIndex& index, const VoxelBlock& block) {
+  VoxelBlock& into = allocate(index);
+  into = block;
+  if (!holds_colour_) {
+    std::vector<VoxelColour>().swap(into.colours);
+  } else if (into.colours.size() != static_cast<size_t>(kBlockVoxels)) {
+    into.colours.assign(kBlockVoxels, VoxelColour{});
+  }
+}
+
+void SparseTsdfMap::enableColour() {
+  if (holds_colour_) return;
+  holds_colour_ = true;
+  blocks_.forEach([](uint64_t, VoxelBlock& block) { block.colours.assign(kBlockVoxels, VoxelColour{}); });
 }
 
 void SparseTsdfMap::remove(const BlockIndex& block) {
@@ -54,6 +71,11 @@ Voxel SparseTsdfMap::voxel(const Eigen::Vector3i& voxel) const {
   return block ? block->voxels[VoxelBlock::index(localOf(voxel))] : Voxel{positive_truncation_, 0.0f};
 }
 
+VoxelColour SparseTsdfMap::colour(const Eigen::Vector3i& voxel) const {
+  const VoxelBlock* block = find(blockOf(voxel));
+  return block && !block->colours.empty() ? block->colours[VoxelBlock::index(localOf(voxel))] : VoxelColour{};
+}
+
 void SparseTsdfMap::bounds(Eigen::Vector3i* first, Eigen::Vector3i* dims) const {
   if (blocks_.empty()) {
     *first = *dims = Eigen::Vector3i::Zero();
@@ -70,19 +92,24 @@ void SparseTsdfMap::bounds(Eigen::Vector3i* first, Eigen::Vector3i* dims) const 
 
 namespace {
 
-/// The lattice voxels [first, first + dims) of a map on `lattice`, read through voxelAt(index), as
-/// a dense grid at their place.
-template <typename VoxelAt>
+/// The lattice voxels [first, first + dims) of a map on `lattice`, read through voxelAt(index)
+/// (and, when `colourAt` is given, their colours through it), as a dense grid at their place.
+template <typename VoxelAt, typename ColourAt>
 TsdfVolume cropOf(const VolumeConfig& lattice, const Eigen::Vector3i& first, const Eigen::Vector3i& dims,
-                  const VoxelAt& voxelAt) {
+                  const VoxelAt& voxelAt, const ColourAt* colourAt) {
   VolumeConfig crop = lattice;
   crop.dims = dims;
   crop.origin_W = lattice.origin_W + lattice.voxel_size_m * first.cast<double>();
   TsdfVolume volume(crop);
+  if (colourAt) volume.enableColour();
 #pragma omp parallel for schedule(dynamic, 1)
   for (int k = 0; k < dims.z(); ++k) {
     for (int j = 0; j < dims.y(); ++j) {
-      for (int i = 0; i < dims.x(); ++i) volume.setVoxel(i, j, k, voxelAt(first + Eigen::Vector3i(i, j, k)));
+      for (int i = 0; i < dims.x(); ++i) {
+        const Eigen::Vector3i voxel = first + Eigen::Vector3i(i, j, k);
+        volume.setVoxel(i, j, k, voxelAt(voxel));
+        if (colourAt) volume.setColour(i, j, k, (*colourAt)(voxel));
+      }
     }
   }
   return volume;
@@ -91,7 +118,9 @@ TsdfVolume cropOf(const VolumeConfig& lattice, const Eigen::Vector3i& first, con
 }  // namespace
 
 TsdfVolume SparseTsdfMap::toDense(const Eigen::Vector3i& first, const Eigen::Vector3i& dims) const {
-  return cropOf(config_, first, dims, [this](const Eigen::Vector3i& index) { return voxel(index); });
+  const auto colourAt = [this](const Eigen::Vector3i& index) { return colour(index); };
+  return cropOf(config_, first, dims, [this](const Eigen::Vector3i& index) { return voxel(index); },
+                holds_colour_ ? &colourAt : nullptr);
 }
 
 bool SparseTsdfMap::observesNothing() const {
@@ -104,6 +133,7 @@ bool SparseTsdfMap::observesNothing() const {
 
 void SparseTsdfMap::clear() {
   blocks_.clear();
+  holds_colour_ = false;
   cleared_at_ = ++revision_;
 }
 
@@ -119,16 +149,18 @@ void SparseTsdfMap::copyBlocksFrom(const SparseTsdfMap& source, const std::vecto
   if (!config_.sameGrid(source.config_)) {
     throw std::invalid_argument("copyBlocksFrom: the maps differ in geometry");
   }
+  if (source.holds_colour_) enableColour();
   for (const BlockIndex& index : blocks) {
     const VoxelBlock* from = source.find(index);
-    if (from) allocate(index) = *from;
+    if (from) insert(index, *from);
     else remove(index);
   }
 }
 
 size_t SparseTsdfMap::memoryBytes() const {
-  // The blocks and the table's slots.
-  return blocks_.size() * sizeof(VoxelBlock) + blocks_.capacity() * BlockTable<VoxelBlock>::slotBytes();
+  // The blocks (with their colours) and the table's slots.
+  const size_t block_bytes = sizeof(VoxelBlock) + (holds_colour_ ? kBlockVoxels * sizeof(VoxelColour) : 0);
+  return blocks_.size() * block_bytes + blocks_.capacity() * BlockTable<VoxelBlock>::slotBytes();
 }
 
 template <typename FindBlock>
@@ -226,8 +258,10 @@ TsdfVolume toDenseVolume(const TsdfMap& map, const Eigen::AlignedBox3d& region_W
   const DenseRegion region = denseRegionOf(map, region_W);
   if (map.type() == MapType::kSparse) return static_cast<const SparseTsdfMap&>(map).toDense(region.first, region.dims);
   const auto& dense = static_cast<const TsdfVolume&>(map);
+  const auto colourAt = [&dense](const Eigen::Vector3i& v) { return dense.colour(v.x(), v.y(), v.z()); };
   return cropOf(map.config(), region.first, region.dims,
-                [&dense](const Eigen::Vector3i& v) { return dense.voxel(v.x(), v.y(), v.z()); });
+                [&dense](const Eigen::Vector3i& v) { return dense.voxel(v.x(), v.y(), v.z()); },
+                dense.holdsColour() ? &colourAt : nullptr);
 }
 
 DenseRegion denseRegionOf(const TsdfMap& map, const Eigen::AlignedBox3d& region_W) {
@@ -262,6 +296,7 @@ SparseTsdfMap toSparseMap(const TsdfMap& map) {
   if (map.type() == MapType::kSparse) return static_cast<const SparseTsdfMap&>(map);
   const auto& dense = static_cast<const TsdfVolume&>(map);
   SparseTsdfMap sparse(dense.config());
+  if (dense.holdsColour()) sparse.enableColour();
   const Eigen::Vector3i dims = dense.dims();
   const SparseTsdfMap::BlockIndex last = SparseTsdfMap::blockOf(dims - Eigen::Vector3i::Ones());
   for (int bz = 0; bz <= last.z(); ++bz) {
@@ -277,7 +312,9 @@ SparseTsdfMap toSparseMap(const TsdfMap& map) {
               const Voxel v = dense.voxel(i, j, k);
               if (v.weight <= 0.0f) continue;
               if (!block) block = &sparse.allocate(index);
-              block->voxels[VoxelBlock::index(SparseTsdfMap::localOf({i, j, k}))] = v;
+              const int local = VoxelBlock::index(SparseTsdfMap::localOf({i, j, k}));
+              block->voxels[local] = v;
+              if (dense.holdsColour()) block->colours[local] = dense.colour(i, j, k);
             }
           }
         }

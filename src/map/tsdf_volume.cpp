@@ -26,7 +26,17 @@ bool TsdfVolume::observesNothing() const {
   });
 }
 
+void TsdfVolume::enableColour() {
+  if (!colours_.empty()) return;
+  std::ostringstream what;
+  what << "the colours of a dense grid of " << config_.dims.x() << "x" << config_.dims.y() << "x" << config_.dims.z()
+       << " voxels";
+  requireMemory(voxel_count_ * sizeof(VoxelColour), what.str());
+  colours_.assign(voxel_count_, VoxelColour{});
+}
+
 void TsdfVolume::clear() {
+  std::vector<VoxelColour>().swap(colours_);
   const Voxel unseen{positive_truncation_, 0.0f};
   if (compact()) {
     std::vector<Voxel>().swap(voxels_);
@@ -47,6 +57,12 @@ void TsdfVolume::copySlabsFrom(const TsdfVolume& source, int k_begin, int k_end)
   const size_t first = index(0, 0, k_begin), last = index(0, 0, k_end);
   if (compact()) std::copy(source.compact_.begin() + first, source.compact_.begin() + last, compact_.begin() + first);
   else std::copy(source.voxels_.begin() + first, source.voxels_.begin() + last, voxels_.begin() + first);
+  if (source.holdsColour()) {
+    enableColour();
+    std::copy(source.colours_.begin() + first, source.colours_.begin() + last, colours_.begin() + first);
+  } else if (holdsColour()) {
+    std::fill(colours_.begin() + first, colours_.begin() + last, VoxelColour{});
+  }
 }
 
 bool TsdfVolume::locate(const Eigen::Vector3f& p_W, size_t* base, Eigen::Vector3f* frac) const {

@@ -234,6 +234,15 @@ std::vector<ParameterSpec> buildTable() {
                          [](auto& s) -> auto& { return s.pipeline.raycast.max_refinement_steps; }));
   t.push_back(bound<double>("MaxWeight", "", "Wmax, the weight cap of the running average", leftOpen(0.0, kMaxVoxelWeight),
                             same(64.0), kLive, kAll, [](auto& s) -> auto& { return s.pipeline.integrator.max_weight; }));
+  t.push_back(bound<bool>("Colour", "",
+                          "fuse the colour images registered to the depth into the map (a colour per voxel, 4 bytes "
+                          "more), for coloured meshes and clouds; off: no colour is read or stored; tracking is the same "
+                          "either way",
+                          {}, {true, false, false}, kLive, kAll, [](auto& s) -> auto& { return s.pipeline.fuse_colour; }));
+  t.push_back(bound<int>("ColourMaxWeight", "",
+                         "the most a voxel's colour weighs (one a frame): lower follows a change of light sooner",
+                         closed(1, 255), same(16), kLive, kAll,
+                         [](auto& s) -> auto& { return s.pipeline.integrator.max_colour_weight; }));
   t.push_back(bound<int>("ImageWidth", "px", "image width (640, 320 or 160); scales the intrinsics", closed(1, 10000),
                          same(640), kAtStart, kNodeOnly, [](auto& s) -> auto& { return s.camera.image_width; }));
   t.push_back(bound<int>("ImageHeight", "px", "image height (480, 240 or 120)", closed(1, 10000), same(480), kAtStart,

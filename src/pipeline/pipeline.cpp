@@ -523,18 +523,31 @@ void SdfPipeline::dropSearchMap() {
 }
 
 FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s,
-                                      const std::optional<Eigen::Isometry3d>& T_odom_C) {
-  return process(depth, camera, timestamp_s, std::nullopt, T_odom_C);
+                                      const std::optional<Eigen::Isometry3d>& T_odom_C, const ColourImage* colour) {
+  return process(depth, camera, timestamp_s, std::nullopt, T_odom_C, colour);
 }
 
 FrameReport SdfPipeline::processFrameAtPose(const DepthImage& depth, const PinholeCamera& camera,
-                                            const Eigen::Isometry3d& T_W_C, double timestamp_s) {
-  return process(depth, camera, timestamp_s, T_W_C, std::nullopt);
+                                            const Eigen::Isometry3d& T_W_C, double timestamp_s,
+                                            const ColourImage* colour) {
+  return process(depth, camera, timestamp_s, T_W_C, std::nullopt, colour);
+}
+
+const ColourImage* SdfPipeline::prepareColour(const ColourImage* colour, const DepthImage& depth,
+                                              const PinholeCamera& camera, FrameReport* report) {
+  if (!colour || !config_.fuse_colour) return nullptr;
+  if (std::string mismatch = colour->sizeMismatch(depth.width(), depth.height()); !mismatch.empty()) {
+    report->colour_problem = std::move(mismatch);
+    return nullptr;
+  }
+  if (camera.distortion.isZero()) return colour;
+  undistortion_->apply(*colour, &colour_buffer_);  // prepareDepth() made the pixel map of this camera
+  return &colour_buffer_;
 }
 
 FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s,
                                  const std::optional<Eigen::Isometry3d>& given_T_W_C,
-                                 const std::optional<Eigen::Isometry3d>& T_odom_C) {
+                                 const std::optional<Eigen::Isometry3d>& T_odom_C, const ColourImage* colour) {
   FrameReport report;
   report.track.T_W_C = T_W_C_;
   const std::string mismatch = camera.sizeMismatch(depth.width(), depth.height());
@@ -544,6 +557,7 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     return report;
   }
   const DepthImage filtered = prepareDepth(depth, camera);
+  const ColourImage* colour_in = prepareColour(colour, depth, camera, &report);
   const PinholeCamera ideal_camera = camera.withoutDistortion();  // the camera of the prepared image
   if (filtered.countMeasurements() == 0) {
     report.track.status = TrackStatus::kBadInput;
@@ -688,11 +702,12 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     const auto start = std::chrono::steady_clock::now();
     // Fusion must find every block of its view in memory: a swapped one would be made anew.
     restoreNear(T_W_C_, ideal_camera, furthest_m, &report);
-    integrator_->integrate(filtered, ideal_camera, T_W_C_, map_.get());
+    integrator_->integrate(filtered, ideal_camera, T_W_C_, map_.get(), colour_in);
+    report.coloured = colour_in != nullptr;
     ++active_.frames_fused;
     if (handover_frames_left_ > 0) {
       if (handover_fuses_previous_) {
-        integrator_->integrate(filtered, ideal_camera, T_W_C_, closed_submaps_.back().map.get());
+        integrator_->integrate(filtered, ideal_camera, T_W_C_, closed_submaps_.back().map.get(), colour_in);
         ++closed_submaps_.back().place.frames_fused;
       }
       if (--handover_frames_left_ == 0) endHandover();

@@ -106,26 +106,9 @@ geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T, const ro
   return tf;
 }
 
-/// "timestamp rest..." lines of an optional TUM list file ('#' comments); empty if it is absent.
-std::vector<std::pair<double, std::string>> readTimedLines(const std::string& path) {
-  std::vector<std::pair<double, std::string>> lines;
-  std::ifstream in(path);
-  if (!in) return lines;
-  std::string line;
-  int number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream fields(line);
-    double t;
-    std::string rest;
-    if (!(fields >> t) || !std::isfinite(t)) {
-      throw std::runtime_error(path + ":" + std::to_string(number) + ": expected a timestamp, got \"" + line + "\"");
-    }
-    std::getline(fields >> std::ws, rest);
-    lines.emplace_back(t, rest);
-  }
-  return lines;
+/// A TUM list's lines (rgb.txt, accelerometer.txt), or none when the folder has no such file.
+std::vector<st::TimedLine> readOptionalList(const std::string& path) {
+  return std::ifstream(path) ? st::readTimedList(path) : std::vector<st::TimedLine>();
 }
 
 sensor_msgs::Image readColourImage(const std::string& path, const std_msgs::Header& header) {
@@ -175,8 +158,8 @@ int run(int argc, char** argv) {
     odometry.clear();
   }
   const auto& gt = sequence.groundTruth();
-  const auto colour = readTimedLines(args.positional(0) + "/rgb.txt");
-  const auto accelerometer = readTimedLines(args.positional(0) + "/accelerometer.txt");
+  const auto colour = readOptionalList(args.positional(0) + "/rgb.txt");
+  const auto accelerometer = readOptionalList(args.positional(0) + "/accelerometer.txt");
   // What camera_info says about an image of the given size.
   auto recordedCamera = [&](int width, int height) {
     if (args.has("openni-default-intrinsics")) return st::PinholeCamera::openNiDefault(width, height);
@@ -219,10 +202,10 @@ int run(int argc, char** argv) {
         bag.write("/tf", t, tf);
         next_chain_s += 1.0 / kChainRate_hz;
       }
-      while (accel_index < accelerometer.size() && accelerometer[accel_index].first <= until_s) {
-        std::istringstream fields(accelerometer[accel_index].second);
+      while (accel_index < accelerometer.size() && accelerometer[accel_index].timestamp_s <= until_s) {
+        std::istringstream fields(accelerometer[accel_index].rest);
         sensor_msgs::Imu imu;
-        imu.header.stamp = stamp(accelerometer[accel_index].first);
+        imu.header.stamp = stamp(accelerometer[accel_index].timestamp_s);
         imu.header.frame_id = "/openni_depth_optical_frame";
         imu.orientation_covariance[0] = -1.0;  // no orientation
         imu.angular_velocity_covariance[0] = -1.0;
@@ -232,13 +215,13 @@ int run(int argc, char** argv) {
         bag.write("/imu", imu.header.stamp, imu);
         ++accel_index;
       }
-      while (colour_index < colour.size() && colour[colour_index].first <= until_s) {
+      while (colour_index < colour.size() && colour[colour_index].timestamp_s <= until_s) {
         std_msgs::Header header;
         header.seq = static_cast<uint32_t>(colour_index);
-        header.stamp = stamp(colour[colour_index].first);
+        header.stamp = stamp(colour[colour_index].timestamp_s);
         header.frame_id = "/openni_rgb_optical_frame";
         const sensor_msgs::Image image =
-            readColourImage(args.positional(0) + "/" + colour[colour_index].second, header);
+            readColourImage(args.positional(0) + "/" + colour[colour_index].rest, header);
         const st::PinholeCamera camera = recordedCamera(static_cast<int>(image.width), static_cast<int>(image.height));
         bag.write("/camera/rgb/image_color", header.stamp, image);
         bag.write("/camera/rgb/camera_info", header.stamp, sdf_tracker_ros::toCameraInfo(camera, header));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <unordered_map>
 
@@ -33,14 +34,17 @@ SurfaceCloud concatenate(const std::vector<SurfaceCloud>& parts) {
   for (const SurfaceCloud& part : parts) {
     cloud.points_W.insert(cloud.points_W.end(), part.points_W.begin(), part.points_W.end());
     cloud.normals_W.insert(cloud.normals_W.end(), part.normals_W.begin(), part.normals_W.end());
+    cloud.colours.insert(cloud.colours.end(), part.colours.begin(), part.colours.end());
   }
   return cloud;
 }
 
-/// A mesh vertex before welding: the lattice edge it lies on and its position.
+/// A mesh vertex before welding: the lattice edge it lies on, its position and its colour (when
+/// the map holds colour).
 struct EdgeVertex {
   uint64_t key;
   Eigen::Vector3f p_W;
+  Rgb colour;
 };
 
 /// The crossings on the (up to three) lattice edges from voxel (i, j, k) towards +x, +y and +z;
@@ -60,6 +64,9 @@ void crossingsFromVoxel(const TsdfVolume& lattice, const TsdfMap& field, int i, 
     p_W[axis] += t * lattice.voxelSize();
     out->points_W.push_back(p_W);
     out->normals_W.push_back(normalAt(field, p_W));
+    if (lattice.holdsColour()) {
+      out->colours.push_back(colourOnEdge(lattice.colour(i, j, k), lattice.colour(n.x(), n.y(), n.z()), t));
+    }
   }
 }
 
@@ -84,7 +91,9 @@ void trianglesOfCell(const TsdfVolume& lattice, int i, int j, int k, std::vector
     const Eigen::Vector3f pa = lattice.position(i, j, k) + lattice.voxelSize() * cornerOffset(a).cast<float>();
     const Eigen::Vector3f pb = lattice.position(i, j, k) + lattice.voxelSize() * cornerOffset(b).cast<float>();
     const uint64_t lo = std::min(index[a], index[b]), hi = std::max(index[a], index[b]);
-    return EdgeVertex{lo * lattice.voxelCount() + hi, pa + t * (pb - pa)};
+    const Rgb colour = lattice.holdsColour() ? colourOnEdge(lattice.colour(index[a]), lattice.colour(index[b]), t)
+                                             : kUnseenColour;
+    return EdgeVertex{lo * lattice.voxelCount() + hi, pa + t * (pb - pa), colour};
   };
   for (const auto& tet : kTetrahedra) {
     std::array<int, 4> inside, outside;
@@ -121,8 +130,9 @@ void trianglesOfCell(const TsdfVolume& lattice, int i, int j, int k, std::vector
   }
 }
 
-/// Joins triangle corners into an indexed mesh, one vertex per lattice edge; normals from `field`.
-TriangleMesh weld(const std::vector<std::vector<EdgeVertex>>& pieces, const TsdfMap& field) {
+/// Joins triangle corners into an indexed mesh, one vertex per lattice edge; normals from `field`,
+/// the corners' colours with `coloured`.
+TriangleMesh weld(const std::vector<std::vector<EdgeVertex>>& pieces, const TsdfMap& field, bool coloured) {
   TriangleMesh mesh;
   std::unordered_map<uint64_t, int> vertex_of_edge;
   for (const auto& piece : pieces) {
@@ -131,7 +141,10 @@ TriangleMesh weld(const std::vector<std::vector<EdgeVertex>>& pieces, const Tsdf
       for (int m = 0; m < 3; ++m) {
         const EdgeVertex& ev = piece[c + m];
         auto inserted = vertex_of_edge.emplace(ev.key, static_cast<int>(mesh.vertices_W.size()));
-        if (inserted.second) mesh.vertices_W.push_back(ev.p_W);
+        if (inserted.second) {
+          mesh.vertices_W.push_back(ev.p_W);
+          if (coloured) mesh.colours.push_back(ev.colour);
+        }
         triangle[m] = inserted.first->second;
       }
       // A quad split can collapse to a sliver where a corner sits exactly on zero.
@@ -153,13 +166,17 @@ TsdfVolume paddedBlock(const SparseTsdfMap& map, const SparseTsdfMap::BlockIndex
   config.dims = Eigen::Vector3i::Constant(kBlockSide + 1);
   config.origin_W = map.config().origin_W + map.config().voxel_size_m * first.cast<double>();
   TsdfVolume padded(config);
+  if (map.holdsColour()) padded.enableColour();
   const VoxelBlock* block = map.find(index);
   for (int k = 0; k <= kBlockSide; ++k) {
     for (int j = 0; j <= kBlockSide; ++j) {
       for (int i = 0; i <= kBlockSide; ++i) {
-        const bool inside = i < kBlockSide && j < kBlockSide && k < kBlockSide;
-        padded.setVoxel(i, j, k, inside && block ? block->voxels[VoxelBlock::index(i, j, k)]
-                                                 : map.voxel(first + Eigen::Vector3i(i, j, k)));
+        const bool inside = i < kBlockSide && j < kBlockSide && k < kBlockSide && block;
+        const Eigen::Vector3i voxel = first + Eigen::Vector3i(i, j, k);
+        padded.setVoxel(i, j, k, inside ? block->voxels[VoxelBlock::index(i, j, k)] : map.voxel(voxel));
+        if (map.holdsColour()) {
+          padded.setColour(i, j, k, inside ? block->colours[VoxelBlock::index(i, j, k)] : map.colour(voxel));
+        }
       }
     }
   }
@@ -202,10 +219,18 @@ TriangleMesh denseMesh(const TsdfVolume& volume) {
       for (int i = 0; i < dims.x() - 1; ++i) trianglesOfCell(volume, i, j, k, &slices[k]);
     }
   }
-  return weld(slices, volume);
+  return weld(slices, volume, volume.holdsColour());
 }
 
 }  // namespace
+
+Rgb colourOnEdge(const VoxelColour& a, const VoxelColour& b, float t) {
+  if (a.weight == 0 && b.weight == 0) return kUnseenColour;
+  if (b.weight == 0) return {a.r, a.g, a.b};
+  if (a.weight == 0) return {b.r, b.g, b.b};
+  const auto mix = [t](uint8_t x, uint8_t y) { return static_cast<uint8_t>(std::lround(x + t * (y - x))); };
+  return {mix(a.r, b.r), mix(a.g, b.g), mix(a.b, b.b)};
+}
 
 SurfaceCloud extractSurfaceCloud(const TsdfMap& map) {
   if (map.type() == MapType::kSparse) return sparseCloud(static_cast<const SparseTsdfMap&>(map));
@@ -228,6 +253,7 @@ void appendMesh(const TriangleMesh& part, TriangleMesh* mesh) {
   const int offset = static_cast<int>(mesh->vertices_W.size());
   mesh->vertices_W.insert(mesh->vertices_W.end(), part.vertices_W.begin(), part.vertices_W.end());
   mesh->normals_W.insert(mesh->normals_W.end(), part.normals_W.begin(), part.normals_W.end());
+  mesh->colours.insert(mesh->colours.end(), part.colours.begin(), part.colours.end());
   for (const Eigen::Vector3i& t : part.triangles) mesh->triangles.push_back(t + Eigen::Vector3i::Constant(offset));
 }
 
@@ -239,7 +265,7 @@ TriangleMesh extractBlockMesh(const SparseTsdfMap& map, const SparseTsdfMap::Blo
       for (int i = 0; i < kBlockSide; ++i) trianglesOfCell(padded, i, j, k, &corners[0]);
     }
   }
-  return weld(corners, map);
+  return weld(corners, map, map.holdsColour());
 }
 
 }  // namespace sdf_tracker

@@ -46,7 +46,9 @@ const char* kUsage = R"(usage: sdf_tracker_offline --sequence DIR --output DIR [
 
 Tracks a depth camera through a TUM-layout sequence and reconstructs the scene.
 
-  --sequence DIR        folder with depth.txt, depth/*.png [, intrinsics.txt, groundtruth.txt]
+  --sequence DIR        folder with depth.txt, depth/*.png [, intrinsics.txt, groundtruth.txt,
+                        rgb.txt: colour images registered to the depth, for a coloured map;
+                        --param Colour=false ignores them]
   --output DIR          where trajectory.txt, mesh.ply, cloud.ply, frames.csv (and, with ground
                         truth, accuracy.txt and trajectory.png) are written; created if missing
   --preset NAME         default | paper (Table II) | reference (its launch file); default: default
@@ -205,6 +207,15 @@ int run(int argc, char** argv) {
             << "\n";
   std::cout << camera.distortion.summary(sequence.distortionSource()) << "\n";
   if (!sequence.distortionHint().empty()) std::cout << "note: " << sequence.distortionHint() << "\n";
+  // Colour from rgb.txt (TUM's depth is registered to it), when the sequence has one and Colour is on.
+  const bool read_colour = settings.pipeline.fuse_colour && sequence.hasColourList();
+  if (read_colour) {
+    std::cout << "colour: " << sequence.colouredFrames() << " of " << sequence.size()
+              << " depth frames paired with an image of rgb.txt within " << st::TumSequence::kMaxColourGap_s * 1000.0
+              << " ms (the others are fused without colour)\n";
+  } else if (sequence.hasColourList()) {
+    std::cout << "colour: off (Colour=false): rgb.txt is not read\n";
+  }
   st::SdfPipeline pipeline(settings.pipeline);
   if (args.has("initial-pose") && !args.has("load-volume")) {
     throw std::invalid_argument("--initial-pose places the camera in a loaded map (--load-volume); a new map "
@@ -253,6 +264,7 @@ int run(int argc, char** argv) {
   size_t tracked_in_map = 0;  // frames tracked against a map (not the one that started it)
   size_t unreadable = 0;      // frames whose image could not be read
   size_t swap_errors = 0;     // frames whose blocks could not be swapped (MaxMemoryMB)
+  size_t coloured = 0, colour_errors = 0;  // frames fused with colour; colour images that could not be used
   std::string first_swap_error;
   std::string first_unreadable;
   st::tools::ProgressBar progress(sequence.size(), !args.has("quiet"));
@@ -283,11 +295,23 @@ int run(int argc, char** argv) {
       continue;
     }
     const st::DepthImage& depth = *read;
+    std::optional<st::ColourImage> colour;
+    if (read_colour) {
+      try {
+        colour = sequence.colour(i);
+      } catch (const std::runtime_error& e) {
+        // The depth is tracked and fused all the same, without colour; said once, counted.
+        if (colour_errors++ == 0) std::cerr << "\nframe " << i << ": " << e.what() << ": fused without colour\n";
+      }
+    }
+    const st::ColourImage* colour_in = colour ? &*colour : nullptr;
     const std::optional<Eigen::Isometry3d> T_odom_C =
         odometry ? odometry->at(sequence.timestamp(i)) : std::optional<Eigen::Isometry3d>();
     const st::FrameReport report =
-        true_T_W_C.empty() ? pipeline.processFrame(depth, camera, sequence.timestamp(i), T_odom_C)
-                           : pipeline.processFrameAtPose(depth, camera, *true_T_W_C[i], sequence.timestamp(i));
+        true_T_W_C.empty()
+            ? pipeline.processFrame(depth, camera, sequence.timestamp(i), T_odom_C, colour_in)
+            : pipeline.processFrameAtPose(depth, camera, *true_T_W_C[i], sequence.timestamp(i), colour_in);
+    coloured += report.coloured;
     predicted_by_odometry += report.predicted_by_odometry;
     const st::TrackResult& t = report.track;
     if (report.relocalisation.searched) {
@@ -437,6 +461,10 @@ int run(int argc, char** argv) {
   if (odometry) {
     summary << "\nodometry: " << predicted_by_odometry << " frames predicted from " << args.get("odometry");
   }
+  if (read_colour) {
+    summary << "\ncolour: " << coloured << " frames fused with colour";
+    if (colour_errors > 0) summary << ", " << colour_errors << " colour images could not be used (see above)";
+  }
   summary << "\nplace memory: " << pipeline.places().keyframes().size() << " keyframes, "
           << pipeline.places().bytesPerKeyframe() << " bytes each";
   if (pipeline.config().submaps.enabled()) {
@@ -477,6 +505,7 @@ int run(int argc, char** argv) {
   json << ",\n  \"voxel_count\": " << pipeline.map().voxelCount()
        << ",\n  \"voxel_size_m\": " << jsonNumber(v.voxel_size_m)
        << ",\n  \"compact_voxels\": " << (v.compact_voxels ? "true" : "false")
+       << ",\n  \"coloured_frames\": " << coloured
 #ifdef _OPENMP
        << ",\n  \"threads\": " << omp_get_max_threads()
 #endif

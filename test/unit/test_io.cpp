@@ -238,10 +238,11 @@ TEST(Io, ADenseGridSavedAsASparseMapKeepsEveryObservedVoxel) {
   }
 }
 
-/// Where a .sdfmap's place memory header, map frame and first block start.
+/// Where a .sdfmap's place memory header, map frame, colour flag and first block start.
 constexpr size_t kPlacesHeader = 64;
 constexpr size_t kMapFrame = kPlacesHeader + 48;
-constexpr size_t kFirstBlock = kMapFrame + 64;
+constexpr size_t kColourFlag = kMapFrame + 64;
+constexpr size_t kFirstBlock = kColourFlag + 8;
 
 /// The file's bytes with its FNV-1a checksum made right again, as a careful forger would.
 std::string withValidChecksum(std::string bytes) {
@@ -265,8 +266,8 @@ TEST(Io, CorruptSparseMapsAreRefusedSayingWhatIsWrong) {
   EXPECT_TRUE(has(sparseMapError(dir, good + "x"), "truncated"));
   EXPECT_TRUE(has(sparseMapError(dir, "hello"), "not an sdf_tracker map"));
   std::string version = good;
-  version[8] = 4;
-  EXPECT_TRUE(has(sparseMapError(dir, version), "format version 4; this build reads versions 1 to 3"))
+  version[8] = 5;
+  EXPECT_TRUE(has(sparseMapError(dir, version), "format version 5; this build reads versions 1 to 4"))
       << sparseMapError(dir, version);
   std::string flipped = good;
   flipped[kFirstBlock + 12 + 1000] ^= 0x01;  // one bit of a voxel of the first block
@@ -353,9 +354,9 @@ TEST(Io, TheMapFileKeepsThePlaceMemoryAndAFirstVersionFileStillLoads) {
   EXPECT_EQ(static_cast<const SparseTsdfMap&>(*map).blockIndices(), patternedSparseMap().blockIndices());
 
   // Version 1: the same blocks without the place memory's header or keyframes (nor the map frame).
-  const std::string v3 = readBytes(dir + "/map.sdfmap");
+  const std::string v4 = readBytes(dir + "/map.sdfmap");
   const size_t keyframes = 3 * (56 + 20);
-  std::string v1 = v3.substr(0, kPlacesHeader) + v3.substr(kFirstBlock, v3.size() - kFirstBlock - keyframes);
+  std::string v1 = v4.substr(0, kPlacesHeader) + v4.substr(kFirstBlock, v4.size() - kFirstBlock - keyframes);
   v1[8] = 1;
   writeFile(dir + "/v1.sdfmap", withValidChecksum(v1));
   const std::unique_ptr<TsdfMap> old = io::readMap(dir + "/v1.sdfmap", false, &loaded);
@@ -366,22 +367,22 @@ TEST(Io, TheMapFileKeepsThePlaceMemoryAndAFirstVersionFileStillLoads) {
   auto has = [](const std::string& message, const std::string& part) {
     return message.find(part) != std::string::npos;
   };
-  const size_t first_keyframe = v3.size() - 8 - keyframes;
-  std::string skewed = v3;
+  const size_t first_keyframe = v4.size() - 8 - keyframes;
+  std::string skewed = v4;
   const double two = 2.0;
   skewed.replace(first_keyframe + 24, sizeof(two), reinterpret_cast<const char*>(&two), sizeof(two));
   EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(skewed)), "keyframe 0: orientation of norm"))
       << sparseMapError(dir, withValidChecksum(skewed));
-  std::string wide_code = v3;
+  std::string wide_code = v4;
   wide_code[first_keyframe + 56 + 3] = static_cast<char>(0x30);
   EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(wide_code)), "keyframe 0: fern 3 has code 48, beyond its 4 bits"))
       << sparseMapError(dir, withValidChecksum(wide_code));
-  std::string no_ferns = v3;
+  std::string no_ferns = v4;
   const int32_t zero = 0;
   no_ferns.replace(kPlacesHeader + 16, sizeof(zero), reinterpret_cast<const char*>(&zero), sizeof(zero));
   EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(no_ferns)), "invalid place descriptor: fern_count"))
       << sparseMapError(dir, withValidChecksum(no_ferns));
-  EXPECT_TRUE(has(sparseMapError(dir, v3.substr(0, v3.size() - 30)), "3 keyframes"));
+  EXPECT_TRUE(has(sparseMapError(dir, v4.substr(0, v4.size() - 30)), "3 keyframes"));
 }
 
 TEST(Io, TheMapFileKeepsTheFrameTheMapWasPublishedInAndASecondVersionFileLoadsWithout) {
@@ -406,9 +407,9 @@ TEST(Io, TheMapFileKeepsTheFrameTheMapWasPublishedInAndASecondVersionFileLoadsWi
   io::readMap(dir + "/map.vti", false, nullptr, PlaceMemoryConfig(), &loaded_frame);
   EXPECT_FALSE(loaded_frame) << "a .vti keeps no map frame";
 
-  // Version 2: the place memory, no map frame.
-  const std::string v3 = readBytes(dir + "/map.sdfmap");
-  std::string v2 = v3.substr(0, kMapFrame) + v3.substr(kFirstBlock);
+  // Version 2: the place memory, no map frame (nor colour flag).
+  const std::string v4 = readBytes(dir + "/map.sdfmap");
+  std::string v2 = v4.substr(0, kMapFrame) + v4.substr(kFirstBlock);
   v2[8] = 2;
   writeFile(dir + "/v2.sdfmap", withValidChecksum(v2));
   io::readMap(dir + "/v2.sdfmap", false, &loaded_places, PlaceMemoryConfig(), &loaded_frame);
@@ -420,16 +421,16 @@ TEST(Io, TheMapFileKeepsTheFrameTheMapWasPublishedInAndASecondVersionFileLoadsWi
   auto has = [](const std::string& message, const std::string& part) {
     return message.find(part) != std::string::npos;
   };
-  std::string flag = v3;
+  std::string flag = v4;
   flag[kMapFrame] = 2;
   EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(flag)), "map frame: flag 2 is neither 0 nor 1"))
       << sparseMapError(dir, withValidChecksum(flag));
-  std::string skewed = v3;
+  std::string skewed = v4;
   const double two = 2.0;
   skewed.replace(kMapFrame + 8 + 24, sizeof(two), reinterpret_cast<const char*>(&two), sizeof(two));
   EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(skewed)), "map frame: orientation of norm"))
       << sparseMapError(dir, withValidChecksum(skewed));
-  EXPECT_TRUE(has(sparseMapError(dir, v3.substr(0, kMapFrame + 20)), "truncated"));
+  EXPECT_TRUE(has(sparseMapError(dir, v4.substr(0, kMapFrame + 20)), "truncated"));
 }
 
 TEST(Io, AnEmptyMapIsNeitherWrittenNorLoaded) {

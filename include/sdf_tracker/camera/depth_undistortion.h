@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "sdf_tracker/camera/camera.h"
+#include "sdf_tracker/camera/colour_image.h"
 #include "sdf_tracker/camera/depth_image.h"
 
 namespace sdf_tracker {
@@ -24,6 +25,10 @@ class DepthUndistortion {
   /// `distorted` must have the camera's size (throws std::invalid_argument otherwise). Pixels whose
   /// ray the lens puts outside the image hold no measurement.
   DepthImage apply(const DepthImage& distorted) const;
+  /// The same pixel map for a colour image registered to the depth, into `ideal` (its memory
+  /// reused from frame to frame): each undistorted pixel takes the colour of the pixel its depth
+  /// came from; black where the ray leaves the image.
+  void apply(const ColourImage& distorted, ColourImage* ideal) const;
 
  private:
   PinholeCamera camera_;

@@ -33,4 +33,10 @@ std::unique_ptr<TsdfMap> readMap(const std::string& path, bool compact_voxels = 
 /// then does.
 std::string describeLoadedPlaces(const PlaceMemory* places, bool relocalise);
 
+/// With Colour on, what a loaded map without colour (a .sdfmap before version 4, a map saved
+/// without colour, a .vti without the colour array) means, said once after the file's name:
+/// "holds no colour ...: what it holds shows grey until the camera sees it in colour"; "" when
+/// the map holds colour or Colour is off.
+std::string describeLoadedColour(const TsdfMap& map, bool colour_on);
+
 }  // namespace sdf_tracker::io

@@ -43,7 +43,11 @@ class BlockSwapFile {
   std::vector<uint64_t> keys() const;
 
  private:
-  static constexpr size_t kRecordBytes = sizeof(VoxelBlock::voxels) + sizeof(VoxelBlock::changed_at);
+  /// A record: the voxels, the revision stamp, whether the block holds colour, and room for its
+  /// colours (zeros when it holds none).
+  static constexpr size_t kColourBytes = kBlockVoxels * sizeof(VoxelColour);
+  static constexpr size_t kRecordBytes =
+      sizeof(VoxelBlock::voxels) + sizeof(VoxelBlock::changed_at) + sizeof(uint64_t) + kColourBytes;
 
   std::string directory_;
   int fd_ = -1;

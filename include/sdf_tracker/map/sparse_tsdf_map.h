@@ -53,6 +53,9 @@ struct alignas(64) VoxelBlock {
   /// The map's revision when a voxel of this block last changed, or when the block came back
   /// into the map from a swap file (see SparseTsdfMap::revision()).
   uint64_t changed_at = 0;
+  /// A colour per voxel, in the voxels' order, in a map that holds colour; empty in one that
+  /// does not (SparseTsdfMap::holdsColour()).
+  std::vector<VoxelColour> colours;
 
   static int index(int x, int y, int z) { return (z * kBlockSide + y) * kBlockSide + x; }
   static int index(const Eigen::Vector3i& local) { return index(local.x(), local.y(), local.z()); }
@@ -141,8 +144,12 @@ class SparseTsdfMap : public TsdfMap {
     return inKeyRange(block) ? blocks_.find(keyOf(block)) : nullptr;
   }
   VoxelBlock* find(const BlockIndex& block) { return inKeyRange(block) ? blocks_.find(keyOf(block)) : nullptr; }
-  /// The block, added with every voxel unobserved if it did not exist.
+  /// The block, added with every voxel unobserved (and no colour seen) if it did not exist.
   VoxelBlock& allocate(const BlockIndex& block);
+  /// Puts `block` in the map under `index`, replacing what was there; its colour is made to agree
+  /// with the map's: none seen when the map holds colour and the block brings none, dropped when
+  /// the map holds none (call enableColour() first to keep it).
+  void insert(const BlockIndex& index, const VoxelBlock& block);
   /// Drops the block (its voxels become unobserved); nothing when it does not exist. A reader's
   /// copy learns of it through removedAt().
   void remove(const BlockIndex& block);
@@ -184,6 +191,8 @@ class SparseTsdfMap : public TsdfMap {
   std::vector<BlockIndex> blockIndices() const;
   /// A lattice voxel; unobserved (Dmax, 0) where no block holds it. Not for hot loops.
   Voxel voxel(const Eigen::Vector3i& voxel) const;
+  /// A lattice voxel's colour; none seen where no block (or no colour) holds it.
+  VoxelColour colour(const Eigen::Vector3i& voxel) const;
 
   /// The smallest box of lattice voxels [first, first + dims) that holds every block; dims is zero
   /// when there is no block.
@@ -207,7 +216,8 @@ class SparseTsdfMap : public TsdfMap {
   /// Blocks that changed after `revision` in a fixed (sorted) order.
   std::vector<BlockIndex> changedSince(uint64_t revision) const;
   /// Makes these blocks equal to `source`'s, removing those `source` no longer holds: lets a
-  /// reader keep a copy of a live map up to date in short pieces (see changedSince()).
+  /// reader keep a copy of a live map up to date in short pieces (see changedSince()). Colour
+  /// comes too: this map holds colour once `source` does.
   void copyBlocksFrom(const SparseTsdfMap& source, const std::vector<BlockIndex>& blocks);
 
   bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override;
@@ -215,6 +225,9 @@ class SparseTsdfMap : public TsdfMap {
   /// lookup (about a block's table probe per sample saved).
   std::unique_ptr<FieldSampler> sampler(const Eigen::AlignedBox3f& region_W) const override;
   void clear() override;
+  bool holdsColour() const override { return holds_colour_; }
+  /// Every block gets a colour per voxel, and every block added later.
+  void enableColour() override;
   size_t voxelCount() const override { return blocks_.size() * kBlockVoxels; }
   bool observesNothing() const override;
   size_t memoryBytes() const override;
@@ -236,6 +249,7 @@ class SparseTsdfMap : public TsdfMap {
   uint64_t revision_ = 0;
   uint64_t cleared_at_ = 0;
   uint64_t removed_at_ = 0;
+  bool holds_colour_ = false;
 };
 
 /// The map as a dense grid: a copy of a dense one; the box around every block of a sparse one.

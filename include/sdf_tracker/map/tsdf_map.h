@@ -19,6 +19,18 @@ struct Voxel {
   float weight;
 };
 
+/// The colour a voxel was seen in, 8 bits a channel: the running average of the pixels that
+/// showed it near the surface, one observation a frame, its weight bounded (at most
+/// IntegratorConfig::max_colour_weight) so that it follows a change of light. weight == 0: never
+/// seen in colour. 4 bytes a voxel, kept beside the voxels (a map without colour holds none).
+struct VoxelColour {
+  uint8_t r = 0, g = 0, b = 0;
+  uint8_t weight = 0;
+
+  bool operator==(const VoxelColour& o) const { return r == o.r && g == o.g && b == o.b && weight == o.weight; }
+  bool operator!=(const VoxelColour& o) const { return !(*this == o); }
+};
+
 /// The furthest any truncation band reaches from a surface [m], in front of it or behind, and the
 /// largest weight a voxel may hold: the bounds of the parameters that set them, and of what a map
 /// file may hold.
@@ -122,8 +134,15 @@ class TsdfMap {
   /// sample correctly, only slower. The map must outlive it and stay unchanged while it is used.
   virtual std::unique_ptr<FieldSampler> sampler(const Eigen::AlignedBox3f& region_W) const;
 
-  /// Forgets everything: every voxel back to (Dmax, 0).
+  /// Forgets everything: every voxel back to (Dmax, 0), and the colour with it.
   virtual void clear() = 0;
+  /// The map keeps a colour beside every voxel: since the first image fused in colour (or a file
+  /// that held colour), until clear().
+  virtual bool holdsColour() const = 0;
+  /// Makes room for a colour beside every voxel, none seen yet (nothing when there is room).
+  /// Throws std::runtime_error, changing nothing, when the dense grid's colours need more memory
+  /// than the process can still allocate.
+  virtual void enableColour() = 0;
   /// Voxels stored (observed or not).
   virtual size_t voxelCount() const = 0;
   /// No voxel holds an observation (weight > 0): a new or cleared map, or an empty file's. There

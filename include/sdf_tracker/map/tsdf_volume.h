@@ -61,7 +61,8 @@ class TsdfVolume : public TsdfMap {
   bool observesNothing() const override;
   bool compact() const { return config_.compact_voxels; }
   size_t memoryBytes() const override {
-    return compact() ? compact_.size() * sizeof(CompactVoxel) : voxels_.size() * sizeof(Voxel);
+    return (compact() ? compact_.size() * sizeof(CompactVoxel) : voxels_.size() * sizeof(Voxel)) +
+           colours_.size() * sizeof(VoxelColour);
   }
   std::unique_ptr<TsdfMap> clone() const override { return std::make_unique<TsdfVolume>(*this); }
   /// The lattice's cells, where a trilinear sample can exist.
@@ -69,10 +70,24 @@ class TsdfVolume : public TsdfMap {
     return Eigen::AlignedBox3f(position(0, 0, 0), position(config_.dims - Eigen::Vector3i::Ones()));
   }
 
-  /// Sets every voxel back to (Dmax, 0): nothing observed.
+  /// Sets every voxel back to (Dmax, 0): nothing observed, and no colour.
   void clear() override;
+  bool holdsColour() const override { return !colours_.empty(); }
+  void enableColour() override;
+  /// The colours, one per voxel in the voxels' order; nullptr when the grid holds no colour.
+  VoxelColour* colours() { return colours_.empty() ? nullptr : colours_.data(); }
+  const VoxelColour* colours() const { return colours_.empty() ? nullptr : colours_.data(); }
+  /// A voxel's colour (none seen when the grid holds no colour).
+  VoxelColour colour(size_t index) const { return colours_.empty() ? VoxelColour{} : colours_[index]; }
+  VoxelColour colour(int i, int j, int k) const { return colour(index(i, j, k)); }
+  /// Sets a voxel's colour (making room for colour first).
+  void setColour(size_t index, const VoxelColour& colour) {
+    enableColour();
+    colours_[index] = colour;
+  }
+  void setColour(int i, int j, int k, const VoxelColour& c) { setColour(index(i, j, k), c); }
 
-  /// Copies the z-slabs [k_begin, k_end) of `source`, which must have this volume's config
+  /// Copies the z-slabs [k_begin, k_end) of `source` (their colours too), which must have this volume's config
   /// (std::invalid_argument otherwise). Lets a reader take a snapshot of a live map in short
   /// pieces, holding the writer's lock only for one piece at a time.
   void copySlabsFrom(const TsdfVolume& source, int k_begin, int k_end);
@@ -119,6 +134,7 @@ class TsdfVolume : public TsdfMap {
   size_t voxel_count_;
   std::vector<Voxel> voxels_;           ///< used unless compact
   std::vector<CompactVoxel> compact_;  ///< used when compact
+  std::vector<VoxelColour> colours_;  ///< empty: no colour; else one per voxel
 };
 
 }  // namespace sdf_tracker

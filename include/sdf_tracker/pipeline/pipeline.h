@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "sdf_tracker/camera/camera.h"
+#include "sdf_tracker/camera/colour_image.h"
 #include "sdf_tracker/camera/depth_image.h"
 #include "sdf_tracker/camera/depth_undistortion.h"
 #include "sdf_tracker/fusion/integrator.h"
@@ -78,6 +79,9 @@ struct PipelineConfig {
   SubmapConfig submaps;
   /// Loops between submaps, and the pose graph that places them (needs submaps); off by default.
   LoopClosureConfig loops;
+  /// Fuse the colour images processFrame is given (registered to the depth) into the map; off,
+  /// they are ignored and the map holds no colour.
+  bool fuse_colour = true;
 
   std::vector<std::string> validate() const;
 };
@@ -158,6 +162,11 @@ struct FrameReport {
   bool tracked_in_previous_submap = false;
   /// The submap whose frame the pose is in (SubmapPlace::node; 0 without submaps).
   int submap = 0;
+  /// The frame was fused with its colour image.
+  bool coloured = false;
+  /// Why the colour image given with the frame was not used (its size); the frame was tracked
+  /// and fused all the same.
+  std::string colour_problem;
   LoopReport loop;
 };
 
@@ -179,9 +188,13 @@ class SdfPipeline {
   /// (instead of constant velocity), and stays the estimate along the directions the view does not
   /// constrain; on a frame that fails, the held pose moves on by that motion (dead reckoning), so
   /// that pose() follows the robot until the view fits again.
+  /// `colour`, when given and fuse_colour is on: the colour image registered to the depth (pixel
+  /// for pixel, the same size and lens), fused into the map with the frame; it changes nothing
+  /// else (the pose is the same with it and without it).
   FrameReport processFrame(const DepthImage& depth, const PinholeCamera& camera,
                            double timestamp_s = std::numeric_limits<double>::quiet_NaN(),
-                           const std::optional<Eigen::Isometry3d>& T_odom_C = std::nullopt);
+                           const std::optional<Eigen::Isometry3d>& T_odom_C = std::nullopt,
+                           const ColourImage* colour = nullptr);
 
   /// Measures the tracker alone: tracks the frame from the given pose T_W_C (e.g. the true one),
   /// reports where the tracker took it, and then fuses the frame at the given pose, whatever the
@@ -189,7 +202,8 @@ class SdfPipeline {
   /// at true poses, free of the drift that fusion at estimated poses adds. The first frame's
   /// given pose places the map (sdf_tracker_offline --fuse-ground-truth).
   FrameReport processFrameAtPose(const DepthImage& depth, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C,
-                                 double timestamp_s = std::numeric_limits<double>::quiet_NaN());
+                                 double timestamp_s = std::numeric_limits<double>::quiet_NaN(),
+                                 const ColourImage* colour = nullptr);
 
   /// Camera to world at the last accepted frame.
   const Eigen::Isometry3d& pose() const { return T_W_C_; }
@@ -278,7 +292,12 @@ class SdfPipeline {
   /// processFrame, or with given_T_W_C processFrameAtPose.
   FrameReport process(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s,
                       const std::optional<Eigen::Isometry3d>& given_T_W_C,
-                      const std::optional<Eigen::Isometry3d>& T_odom_C);
+                      const std::optional<Eigen::Isometry3d>& T_odom_C, const ColourImage* colour);
+  /// The colour image as the integrator takes it (undistorted as the depth, in colour_buffer_),
+  /// or nullptr when there is none, colour is off, or it does not fit the depth (said in the
+  /// report).
+  const ColourImage* prepareColour(const ColourImage* colour, const DepthImage& depth, const PinholeCamera& camera,
+                                   FrameReport* report);
   /// The image as the tracker and integrator take it: undistorted, depths out of range removed.
   DepthImage prepareDepth(const DepthImage& depth, const PinholeCamera& camera);
   /// Where the camera should be at `timestamp_s` if it kept its last motion; the last pose when
@@ -328,6 +347,8 @@ class SdfPipeline {
   std::unique_ptr<Tracker> tracker_;
   /// The pixel map of the last distorted camera seen (made again when the camera changes).
   std::optional<DepthUndistortion> undistortion_;
+  /// The last colour image undistorted (its memory reused).
+  ColourImage colour_buffer_;
   /// Present with a sparse map and max_map_memory_mb > 0.
   std::unique_ptr<MapMemoryBudget> budget_;
   Eigen::Isometry3d T_W_C_ = Eigen::Isometry3d::Identity();
