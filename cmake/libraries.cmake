@@ -36,7 +36,7 @@ sdf_tracker_part(io SOURCES colour_image_file depth_png files map_file mesh_file
   DEPENDS camera map surface places LINK ${OpenCV_LIBS})
 target_include_directories(sdf_tracker_io SYSTEM PRIVATE ${OpenCV_INCLUDE_DIRS})
 sdf_tracker_part(sim SOURCES relocalisation_cases synthetic wheel_odometry DEPENDS io)
-sdf_tracker_part(eval SOURCES evaluation DEPENDS io)
+sdf_tracker_part(eval SOURCES colour_agreement evaluation DEPENDS io)
 
 # Depth cameras' own formats, without ROS or the vendors' libraries: the Kinect v1's disparity
 # model, fakenect recordings and OpenNI .oni files.

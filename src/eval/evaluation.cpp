@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include "sdf_tracker/io/tum_sequence.h"
 #include "sdf_tracker/util/se3.h"
 
 namespace sdf_tracker::evaluation {
@@ -35,27 +36,14 @@ ErrorStats summarize(std::vector<double> errors) {
 std::vector<std::pair<size_t, size_t>> associate(const std::vector<io::StampedPose>& estimate,
                                                  const std::vector<io::StampedPose>& ground_truth,
                                                  double max_difference_s) {
-  // Candidates sorted by time difference, then taken greedily (as the benchmark's associate.py).
-  std::vector<std::tuple<double, size_t, size_t>> candidates;
-  for (size_t i = 0; i < estimate.size(); ++i) {
-    const double t = estimate[i].timestamp_s;
-    auto it = std::lower_bound(ground_truth.begin(), ground_truth.end(), t,
-                               [](const io::StampedPose& p, double time) { return p.timestamp_s < time; });
-    const size_t hi = static_cast<size_t>(it - ground_truth.begin());
-    for (size_t j = hi >= 2 ? hi - 2 : 0; j < std::min(ground_truth.size(), hi + 2); ++j) {
-      const double dt = std::fabs(ground_truth[j].timestamp_s - t);
-      if (dt <= max_difference_s) candidates.emplace_back(dt, i, j);
-    }
-  }
-  std::sort(candidates.begin(), candidates.end());
-  std::vector<bool> est_used(estimate.size()), gt_used(ground_truth.size());
+  std::vector<double> estimate_s, ground_truth_s;
+  for (const io::StampedPose& pose : estimate) estimate_s.push_back(pose.timestamp_s);
+  for (const io::StampedPose& pose : ground_truth) ground_truth_s.push_back(pose.timestamp_s);
+  const std::vector<long> partner = associateByTime(estimate_s, ground_truth_s, max_difference_s);
   std::vector<std::pair<size_t, size_t>> matches;
-  for (const auto& [dt, i, j] : candidates) {
-    if (est_used[i] || gt_used[j]) continue;
-    est_used[i] = gt_used[j] = true;
-    matches.emplace_back(i, j);
+  for (size_t i = 0; i < partner.size(); ++i) {
+    if (partner[i] >= 0) matches.emplace_back(i, static_cast<size_t>(partner[i]));
   }
-  std::sort(matches.begin(), matches.end());
   return matches;
 }
 

@@ -64,6 +64,55 @@ sensor_msgs::Image toImageMsg(const sdf_tracker::DepthImage& depth, const std_ms
   return msg;
 }
 
+sdf_tracker::ColourImage toColourImage(const sensor_msgs::Image& msg) {
+  // Where red, green and blue sit in a pixel, and its bytes.
+  struct Layout {
+    const char* encoding;
+    int bytes, r, g, b;
+  };
+  static const Layout kLayouts[] = {{"rgb8", 3, 0, 1, 2}, {"bgr8", 3, 2, 1, 0}, {"rgba8", 4, 0, 1, 2},
+                                    {"bgra8", 4, 2, 1, 0}, {"mono8", 1, 0, 0, 0}};
+  const Layout* layout = nullptr;
+  for (const Layout& l : kLayouts) {
+    if (msg.encoding == l.encoding) layout = &l;
+  }
+  if (!layout) {
+    throw std::invalid_argument("unsupported colour encoding \"" + msg.encoding +
+                                "\" (expected rgb8, bgr8, rgba8, bgra8 or mono8)");
+  }
+  if (msg.width == 0 || msg.height == 0 || msg.step < msg.width * static_cast<uint32_t>(layout->bytes) ||
+      msg.data.size() < static_cast<size_t>(msg.step) * msg.height) {
+    throw std::invalid_argument("inconsistent colour image: " + std::to_string(msg.width) + "x" +
+                                std::to_string(msg.height) + " " + msg.encoding + ", step " + std::to_string(msg.step) +
+                                ", " + std::to_string(msg.data.size()) + " bytes");
+  }
+  sdf_tracker::ColourImage colour(static_cast<int>(msg.width), static_cast<int>(msg.height));
+  for (uint32_t v = 0; v < msg.height; ++v) {
+    const uint8_t* in = msg.data.data() + static_cast<size_t>(v) * msg.step;
+    uint8_t* out = colour.at(0, static_cast<int>(v));
+    if (layout->bytes == 3 && layout->r == 0) {
+      std::memcpy(out, in, static_cast<size_t>(msg.width) * 3);
+      continue;
+    }
+    for (uint32_t u = 0; u < msg.width; ++u, in += layout->bytes, out += 3) {
+      out[0] = in[layout->r], out[1] = in[layout->g], out[2] = in[layout->b];
+    }
+  }
+  return colour;
+}
+
+sensor_msgs::Image toImageMsg(const sdf_tracker::ColourImage& colour, const std_msgs::Header& header) {
+  sensor_msgs::Image msg;
+  msg.header = header;
+  msg.width = static_cast<uint32_t>(colour.width());
+  msg.height = static_cast<uint32_t>(colour.height());
+  msg.encoding = enc::RGB8;
+  msg.is_bigendian = 0;
+  msg.step = msg.width * 3;
+  msg.data.assign(colour.data(), colour.data() + static_cast<size_t>(msg.step) * msg.height);
+  return msg;
+}
+
 sdf_tracker::PinholeCamera toCamera(const sensor_msgs::CameraInfo& info) {
   sdf_tracker::PinholeCamera camera;
   camera.fx = info.K[0];
@@ -186,7 +235,9 @@ visualization_msgs::Marker toMarker(const sdf_tracker::TriangleMesh& mesh, const
   marker.color.g = 0.75f;
   marker.color.b = 0.8f;
   marker.color.a = 1.0f;
+  const bool coloured = !mesh.colours.empty();
   marker.points.reserve(mesh.triangles.size() * 3);
+  if (coloured) marker.colors.reserve(mesh.triangles.size() * 3);
   for (const auto& t : mesh.triangles) {
     for (int m = 0; m < 3; ++m) {
       geometry_msgs::Point p;
@@ -194,6 +245,13 @@ visualization_msgs::Marker toMarker(const sdf_tracker::TriangleMesh& mesh, const
       p.y = mesh.vertices_W[t[m]].y();
       p.z = mesh.vertices_W[t[m]].z();
       marker.points.push_back(p);
+      if (coloured) {
+        // rviz takes a triangle list's colours per point, in place of marker.color.
+        const sdf_tracker::Rgb& c = mesh.colours[t[m]];
+        std_msgs::ColorRGBA colour;
+        colour.r = c[0] / 255.0f, colour.g = c[1] / 255.0f, colour.b = c[2] / 255.0f, colour.a = 1.0f;
+        marker.colors.push_back(colour);
+      }
     }
   }
   return marker;

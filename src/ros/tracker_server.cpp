@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iomanip>
 #include <numeric>
@@ -28,6 +29,10 @@ constexpr double kThrottle_s = 2.0;
 constexpr int kLostAfterFailedFrames = 10;
 /// Frames wait in ROS's queue only as long as it takes to move them into the mailbox.
 constexpr uint32_t kSubscriberQueue = 5;
+/// Colour images kept for the depth frames to come (half a second at 30 Hz), and how far apart in
+/// stamp a depth frame and its colour image may be (TUM's associate.py's 20 ms).
+constexpr size_t kColourCache = 15;
+constexpr double kMaxColourGap_s = 0.02;
 /// The same pose on ~initialpose again within this many seconds is a repeat, not a new request.
 constexpr double kRepeatedRequest_s = 1.0;
 /// A pose request stamped further ahead of the node's clock than this is refused: its clock is
@@ -56,6 +61,9 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
   readParameters(pnh_, &settings, &options_, &warnings);
   for (const auto& warning : warnings) ROS_WARN("sdf_tracker: %s", warning.c_str());
   camera_settings_ = settings.camera;
+  // Before the reconfigure server, whose first call may subscribe to it.
+  colour_topic_ = nh_.resolveName(options_.colour_topic.empty() ? options_.camera_name + "/rgb/image_color"
+                                                                : options_.colour_topic);
   state_.pipeline = std::make_unique<st::SdfPipeline>(settings.pipeline);
   std::optional<Eigen::Isometry3d> loaded_map_frame;
   if (options_.load_volume != "none" && !options_.load_volume.empty()) {
@@ -134,6 +142,7 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
         pending_pose_request_ = *request;
       });
   watchdog_timer_ = nh_.createTimer(ros::Duration(2.0), &TrackerServer::checkInputs, this);
+  updateColourSubscription(settings.pipeline.fuse_colour);
 
   const auto& v = settings.pipeline.volume;
   const std::string tree = f.odom_frame.empty()
@@ -143,6 +152,58 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
   ROS_INFO("sdf_tracker: listening on %s (intrinsics from %s); %s; tf %s", depth_topic_.c_str(),
            options_.intrinsics_from_parameters ? "parameters" : info_topic_.c_str(), v.describe().c_str(),
            tree.c_str());
+  if (settings.pipeline.fuse_colour) {
+    ROS_INFO("sdf_tracker: colour from %s, %s", colour_topic_.c_str(),
+             options_.colourUsable() ? "registered to the depth" : "NOT used: the depth is not known to be registered to it");
+  }
+}
+
+void TrackerServer::updateColourSubscription(bool colour_on) {
+  if (colour_on == static_cast<bool>(colour_sub_)) return;
+  if (!colour_on) {
+    colour_sub_.shutdown();
+    std::lock_guard<std::mutex> lock(mailbox_mutex_);
+    colour_cache_.clear();
+    return;
+  }
+  colour_sub_ = it_.subscribe(colour_topic_, kSubscriberQueue, &TrackerServer::onColour, this);
+}
+
+void TrackerServer::onColour(const sensor_msgs::ImageConstPtr& image) {
+  if (!options_.colourUsable()) {
+    // Colour from another viewpoint than the depth's would paint every surface with what lies
+    // beside it: not used, and said once.
+    ROS_WARN_ONCE("sdf_tracker: colour images on %s are not used: the depth on %s is not registered to them. Use a "
+                  "driver's registered depth (~depth_registered: true), or set ~colour_registered: true when the depth "
+                  "is registered to the colour by other means (TUM RGB-D's bags are); or Colour: false to stop this "
+                  "subscription",
+                  colour_topic_.c_str(), depth_topic_.c_str());
+    return;
+  }
+  std::lock_guard<std::mutex> lock(mailbox_mutex_);
+  ++colour_received_;
+  colour_cache_.push_back(image);
+  if (colour_cache_.size() > kColourCache) colour_cache_.pop_front();
+}
+
+std::optional<st::ColourImage> TrackerServer::colourAt(const ros::Time& stamp) {
+  sensor_msgs::ImageConstPtr nearest;
+  {
+    std::lock_guard<std::mutex> lock(mailbox_mutex_);
+    double best_s = kMaxColourGap_s;
+    for (const sensor_msgs::ImageConstPtr& image : colour_cache_) {
+      const double gap_s = std::fabs((image->header.stamp - stamp).toSec());
+      if (gap_s <= best_s) best_s = gap_s, nearest = image;
+    }
+  }
+  if (!nearest) return std::nullopt;
+  try {
+    return toColourImage(*nearest);
+  } catch (const std::invalid_argument& e) {
+    ROS_WARN_THROTTLE(kThrottle_s, "sdf_tracker: colour image from %s: %s: the frame is fused without colour",
+                      colour_topic_.c_str(), e.what());
+    return std::nullopt;
+  }
 }
 
 TrackerServer::~TrackerServer() { finish(); }
@@ -159,9 +220,10 @@ bool TrackerServer::finish() {
   std::vector<double> ms = frame_ms_;
   std::sort(ms.begin(), ms.end());
   // Also on stdout: rosconsole may be gone by the time roslaunch stops the node.
-  std::printf("sdf_tracker: %u frames received, %zu processed, %u dropped; per frame in the node: median %.1f ms, "
-              "mean %.1f ms\n",
-              frames_received_, ms.size(), frames_dropped_, ms.empty() ? 0.0 : ms[ms.size() / 2],
+  std::printf("sdf_tracker: %u frames received, %zu processed, %u dropped, %u fused in colour (%u colour images "
+              "received); per frame in the node: median %.1f ms, mean %.1f ms\n",
+              frames_received_, ms.size(), frames_dropped_, frames_coloured_, colour_received_,
+              ms.empty() ? 0.0 : ms[ms.size() / 2],
               ms.empty() ? 0.0 : std::accumulate(ms.begin(), ms.end(), 0.0) / ms.size());
   finished_ = services_->writeAtShutdown();
   return *finished_;
@@ -269,6 +331,8 @@ void TrackerServer::process(const Frame& frame) {
     return drop(mismatch);
   }
 
+  // The colour image taken with it, if one has come (depth never waits for colour).
+  const std::optional<st::ColourImage> colour = colourAt(image.header.stamp);
   // The robot's odometry at this image (~odom_frame), looked up before the state is locked: it may
   // wait for tf.
   const std::optional<Eigen::Isometry3d> T_odom_C = poses_->odometryCameraPose(image.header.stamp, image.header.frame_id);
@@ -309,11 +373,17 @@ void TrackerServer::process(const Frame& frame) {
       pose_request.swap(pending_pose_request_);
     }
     if (pose_request) applyPoseRequest(*pose_request, image.header.frame_id);
-    report = state_.pipeline->processFrame(depth, camera, image.header.stamp.toSec(), T_odom_C);
+    report = state_.pipeline->processFrame(depth, camera, image.header.stamp.toSec(), T_odom_C,
+                                           colour ? &*colour : nullptr);
     if (report.track.status == st::TrackStatus::kBadInput) {
       return drop(report.track.message);
     }
     last_stamp_ = state_.last_stamp = image.header.stamp;
+    frames_coloured_ += report.coloured;
+    if (!report.colour_problem.empty()) {
+      ROS_WARN_THROTTLE(kThrottle_s, "sdf_tracker: colour image from %s: %s: the frame is fused without colour",
+                        colour_topic_.c_str(), report.colour_problem.c_str());
+    }
     T_W_C = state_.pipeline->pose();
     pose_known = state_.pipeline->poseKnown();
     status.consecutive_failures = static_cast<uint32_t>(state_.pipeline->consecutiveFailures());
@@ -463,6 +533,7 @@ void TrackerServer::reconfigure(sdf_tracker::SdfTrackerConfig& config, uint32_t 
     for (const auto& [name, value] : reconfigureValues(config)) st::setParameter(&candidate, name, value);
     st::throwIfInvalid("reconfiguration", candidate.validate());
     state_.pipeline->updateConfig(candidate.pipeline);  // validates again; changes nothing when it throws
+    updateColourSubscription(candidate.pipeline.fuse_colour);
     ROS_INFO("sdf_tracker: reconfigured");
   } catch (const std::invalid_argument& e) {
     ROS_ERROR("sdf_tracker: rejected reconfiguration: %s", e.what());

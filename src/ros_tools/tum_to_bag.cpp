@@ -31,8 +31,6 @@
 #include <sstream>
 
 #include <geometry_msgs/TransformStamped.h>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <rosbag/bag.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Imu.h>
@@ -41,6 +39,7 @@
 
 #include "sdf_tracker/cli/command_line.h"
 #include "sdf_tracker/devices/recording.h"
+#include "sdf_tracker/io/colour_image_file.h"
 #include "sdf_tracker/io/files.h"
 #include "sdf_tracker/io/trajectory_file.h"
 #include "sdf_tracker/io/tum_sequence.h"
@@ -109,22 +108,6 @@ geometry_msgs::TransformStamped toTransform(const Eigen::Isometry3d& T, const ro
 /// A TUM list's lines (rgb.txt, accelerometer.txt), or none when the folder has no such file.
 std::vector<st::TimedLine> readOptionalList(const std::string& path) {
   return std::ifstream(path) ? st::readTimedList(path) : std::vector<st::TimedLine>();
-}
-
-sensor_msgs::Image readColourImage(const std::string& path, const std_msgs::Header& header) {
-  const cv::Mat bgr = cv::imread(path, cv::IMREAD_COLOR);
-  if (bgr.empty()) throw std::runtime_error("cannot read the colour image " + path);
-  cv::Mat rgb;
-  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
-  sensor_msgs::Image msg;
-  msg.header = header;
-  msg.width = static_cast<uint32_t>(rgb.cols);
-  msg.height = static_cast<uint32_t>(rgb.rows);
-  msg.encoding = sensor_msgs::image_encodings::RGB8;
-  msg.step = msg.width * 3;
-  msg.data.resize(static_cast<size_t>(msg.step) * msg.height);
-  for (int v = 0; v < rgb.rows; ++v) std::copy(rgb.ptr<uint8_t>(v), rgb.ptr<uint8_t>(v) + msg.step, &msg.data[v * msg.step]);
-  return msg;
 }
 
 /// About how many bytes the bag of `sequence` takes: its depth images as 32-bit floats and its
@@ -220,8 +203,8 @@ int run(int argc, char** argv) {
         header.seq = static_cast<uint32_t>(colour_index);
         header.stamp = stamp(colour[colour_index].timestamp_s);
         header.frame_id = "/openni_rgb_optical_frame";
-        const sensor_msgs::Image image =
-            readColourImage(args.positional(0) + "/" + colour[colour_index].rest, header);
+        const std::string path = args.positional(0) + "/" + colour[colour_index].rest;
+        const sensor_msgs::Image image = sdf_tracker_ros::toImageMsg(st::io::readColourImage(path), header);
         const st::PinholeCamera camera = recordedCamera(static_cast<int>(image.width), static_cast<int>(image.height));
         bag.write("/camera/rgb/image_color", header.stamp, image);
         bag.write("/camera/rgb/camera_info", header.stamp, sdf_tracker_ros::toCameraInfo(camera, header));

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "sdf_tracker/io/colour_image_file.h"
 #include "sdf_tracker/io/depth_png.h"
 #include "sdf_tracker/io/files.h"
 #include "sdf_tracker/io/trajectory_file.h"
@@ -646,6 +647,19 @@ void writeSequence(const std::string& directory, const SequenceSpec& spec) {
       [&](size_t i) { return scene.render(spec.camera, poses[i].T_W_C, spec.noise, spec.seed * 100003u + i); },
       spec.camera, spec.depth_factor);
   if (spec.odometry) io::writeTrajectory(directory + "/odometry.txt", wheelOdometry(poses, *spec.odometry));
+  if (spec.colour) {
+    io::makeDirectories(directory + "/rgb");
+    std::ostringstream colour_list;
+    colour_list << "# " << comment.str() << ": colour registered to the depth\n# timestamp filename\n" << std::fixed
+                << std::setprecision(6);
+    for (const io::StampedPose& pose : poses) {
+      char name[64];
+      std::snprintf(name, sizeof(name), "rgb/%.6f.png", pose.timestamp_s);
+      io::writeColourImage(directory + "/" + name, renderColour(scene, spec.camera, pose.T_W_C));
+      colour_list << pose.timestamp_s << ' ' << name << '\n';
+    }
+    io::writeTextFile(directory + "/rgb.txt", colour_list.str());
+  }
   // What a resting accelerometer fixed to the depth camera reads (gravity's reaction, up: -y in
   // this world), at 100 Hz from half a second before the first frame, in the camera's frame.
   std::ostringstream accelerometer;
@@ -658,6 +672,30 @@ void writeSequence(const std::string& directory, const SequenceSpec& spec) {
                   << a_C.z() << '\n';
   }
   io::writeTextFile(directory + "/accelerometer.txt", accelerometer.str());
+}
+
+Rgb surfaceColour(const Eigen::Vector3d& p_W) {
+  static constexpr Rgb kPalette[6] = {{200, 60, 50}, {60, 170, 70}, {50, 80, 200}, {220, 200, 60}, {150, 70, 170},
+                                      {60, 180, 190}};
+  const Eigen::Vector3d tile = (p_W / kColourTile_m).array().floor();
+  const long index = static_cast<long>(tile.x()) + 2 * static_cast<long>(tile.y()) + 3 * static_cast<long>(tile.z());
+  return kPalette[((index % 6) + 6) % 6];
+}
+
+ColourImage renderColour(const Scene& scene, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C) {
+  NoiseModel exact;
+  exact.enabled = false;
+  const DepthImage depth = scene.render(camera, T_W_C, exact, 0);
+  ColourImage colour(camera.width, camera.height);
+  for (int v = 0; v < camera.height; ++v) {
+    for (int u = 0; u < camera.width; ++u) {
+      const float z = depth.at(u, v);
+      if (!DepthImage::isMeasurement(z)) continue;
+      const Rgb c = surfaceColour(T_W_C * camera.backProject(u, v, z).cast<double>());
+      std::copy(c.begin(), c.end(), colour.at(u, v));
+    }
+  }
+  return colour;
 }
 
 DepthImage withoutRightHalf(DepthImage depth) {

@@ -1,4 +1,5 @@
-// sdf_tracker_evaluate: ATE and RPE of a TUM trajectory against ground truth, with a plot.
+// sdf_tracker_evaluate: ATE and RPE of a TUM trajectory against ground truth, with a plot; or how
+// well a coloured mesh agrees with the colour images it was made from.
 
 #include <cmath>
 #include <iomanip>
@@ -7,14 +8,18 @@
 
 #include "sdf_tracker/cli/command_line.h"
 #include "sdf_tracker/cli/report.h"
+#include "sdf_tracker/eval/colour_agreement.h"
 #include "sdf_tracker/eval/evaluation.h"
 #include "sdf_tracker/io/files.h"
+#include "sdf_tracker/io/mesh_file.h"
 #include "sdf_tracker/io/trajectory_file.h"
+#include "sdf_tracker/io/tum_sequence.h"
 
 namespace {
 
 const char* kUsage = R"(usage: sdf_tracker_evaluate --groundtruth FILE --estimate FILE [--plot FILE.png]
                             [--errors FILE.csv] [--estimate-time-offset S] [--map-frame-from FILE]
+       sdf_tracker_evaluate --mesh FILE.ply --sequence DIR --estimate FILE [--frame-step N]
 
 Absolute trajectory error (rigid alignment) and relative pose error (1 s window), as defined by
 the TUM RGB-D benchmark; timestamps are associated within 0.02 s. --estimate-time-offset S is
@@ -26,16 +31,33 @@ after the alignment ("timestamp,error_m"), to see which frames it comes from.
 map, the frames after a kidnap): FILE is a trajectory in that frame (the session that built the
 map), whose alignment onto the ground truth brings the truth into the map's frame; each estimated
 pose is then compared with it unaligned, and the share within 5 cm and 5 degrees is given.
+
+--mesh: the vertex colours of a mesh (sdf_tracker_offline's mesh.ply) against the colour images
+of the sequence it was made from (rgb.txt), seen from the estimated poses: every N-th frame
+(default 10), each vertex that projects where the frame's depth is within 2 cm of it compared with
+that pixel; the mean difference per channel and the mean and median RGB distance, in levels of 255.
 )";
 
 int run(int argc, char** argv) {
   using namespace sdf_tracker;
   const tools::CommandLine args(argc, argv,
-                                {"groundtruth", "estimate", "plot", "errors", "estimate-time-offset", "map-frame-from"},
+                                {"groundtruth", "estimate", "plot", "errors", "estimate-time-offset", "map-frame-from",
+                                 "mesh", "sequence", "frame-step"},
                                 {"help"});
   if (args.has("help")) {
     std::cout << kUsage;
     return 0;
+  }
+  if (args.has("mesh")) {
+    const TriangleMesh mesh = io::readPlyMesh(args.get("mesh"));
+    const TumSequence sequence = TumSequence::open(args.require("sequence"));
+    const evaluation::ColourAgreement agreement = evaluation::compareMeshColours(
+        mesh, sequence, io::readTrajectory(args.require("estimate")), args.getInt("frame-step", 10));
+    std::cout << std::fixed << std::setprecision(2) << "mesh colours against " << agreement.frames
+              << " colour images (" << agreement.comparisons << " vertex views): mean difference per channel "
+              << agreement.mean_channel_difference << " levels of 255; RGB distance mean " << agreement.mean_distance
+              << ", median " << agreement.median_distance << "\n";
+    return agreement.comparisons > 0 ? 0 : 1;
   }
   const auto ground_truth = io::readTrajectory(args.require("groundtruth"));
   auto estimate = io::readTrajectory(args.require("estimate"));

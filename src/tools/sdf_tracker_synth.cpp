@@ -33,6 +33,8 @@ Renders an analytic indoor scene along a scripted camera path, in TUM layout
                      too long at the corners (B < 0: too short), growing with the square of the
                      distance from the principal point; in [-0.1, 0.1], default 0; applies with
                      --no-noise too
+  --colour           also write rgb/ and rgb.txt: colour images registered to the depth (the
+                     scenes' surfaces in tiles of 0.25 m, six colours), at the depth's timestamps
   --odometry         also write odometry.txt: the camera's poses as a robot's wheel odometry would
                      report them (each metre 2 % too long, the heading drifting 1 degree per metre,
                      noise), for sdf_tracker_offline --odometry
@@ -48,7 +50,7 @@ int run(int argc, char** argv) {
   const tools::CommandLine args(argc, argv,
                                 {"output", "motion", "frames", "seed", "size", "disparity-subpixels", "noise-scale",
                                  "depth-bias", "relocalisation-case"},
-                                {"no-noise", "bare-walls", "odometry", "help"});
+                                {"no-noise", "bare-walls", "odometry", "colour", "help"});
   if (args.has("help")) {
     std::cout << kUsage;
     return 0;
@@ -72,6 +74,7 @@ int run(int argc, char** argv) {
     spec.camera = PinholeCamera::tumFreiburg1().scaledTo(parseInteger("--size", size.substr(0, x)),
                                                          parseInteger("--size", size.substr(x + 1)));
   }
+  spec.colour = args.has("colour");
   if (args.has("odometry")) {
     spec.odometry = synthetic::WheelOdometryModel{};
     spec.odometry->seed = spec.seed;
@@ -85,7 +88,7 @@ int run(int argc, char** argv) {
                                   (spec.noise.depth_bias != 0.0 ? ", depth bias " + args.get("depth-bias") : "");
   const std::string output = args.require("output");
   if (args.has("relocalisation-case")) {
-    for (const char* option : {"motion", "frames", "bare-walls", "odometry"}) {
+    for (const char* option : {"motion", "frames", "bare-walls", "odometry", "colour"}) {
       if (args.has(option)) {
         throw std::invalid_argument(std::string("--") + option + ": a relocalisation case has its own paths (got --relocalisation-case " +
                                     args.get("relocalisation-case") + ")");

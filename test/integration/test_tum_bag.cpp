@@ -1,12 +1,14 @@
 // Watches tum_bag.launch play a TUM-shaped bag at rate 1.0: every frame of /tf and /tf_static has
 // one parent, at least 95 % of the frames get a pose, the estimate is as accurate as the offline
-// pipeline's on the same frames, and the ground truth is shown beside it. With a robot's wheel
+// pipeline's on the same frames, the ground truth is shown beside it, and the map's cloud carries
+// the colours of the bag's colour images. With a robot's wheel
 // odometry in the bag (odom_frame:=odom base_frame:=base_link), the odometry keeps odom -> base_link,
 // the tracker publishes map -> odom, takes the odometry as its prediction, and every ~odom message
 // and the diagnostics are what an EKF and a robot's monitor expect.
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <map>
@@ -17,12 +19,15 @@
 #include <nav_msgs/Odometry.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <sensor_msgs/point_cloud2_iterator.h>
 #include <tf2_eigen/tf2_eigen.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
 #include "launch_watch.h"
 #include "sdf_tracker/cli/odometry_track.h"
+#include "sdf_tracker/sim/synthetic.h"
 
 namespace st = sdf_tracker;
 
@@ -70,6 +75,12 @@ class TumBagTest : public ::testing::Test {
 
   const std::string sequence_dir_ = ros::NodeHandle("~").param<std::string>("sequence", "");
   ros::NodeHandle nh_;
+  sensor_msgs::PointCloud2ConstPtr last_cloud_;  ///< guarded by mutex_
+  ros::Subscriber cloud_sub_ = nh_.subscribe<sensor_msgs::PointCloud2>(
+      "sdf_tracker/cloud", 1, [this](const sensor_msgs::PointCloud2ConstPtr& cloud) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        last_cloud_ = cloud;
+      });
   ros::Subscriber clock_sub_ = nh_.subscribe("/clock", 10, &TumBagTest::onClock, this);
   std::mutex mutex_;
   ros::Time last_clock_;
@@ -105,6 +116,37 @@ TEST_F(TumBagTest, PlaysAtRateOneWithOneParentPerFrameAndOfflineAccuracy) {
 
   st::test::expectOfflineAccuracy(sequence, watch.poses, "tum_bag.launch at rate 1.0", kMinProcessedFraction,
                                   kMaxAteDifference_m);
+
+  // The cloud in the bag's colours: the synthetic scene's tiles (sdf_tracker_synth --colour),
+  // checked at points clear of the tiles' edges by more than the estimate's error.
+  sensor_msgs::PointCloud2ConstPtr cloud;
+  {
+    std::lock_guard<std::mutex> cloud_lock(mutex_);
+    cloud = last_cloud_;
+  }
+  ASSERT_TRUE(cloud) << "no cloud on sdf_tracker/cloud";
+  const bool has_rgb = std::any_of(cloud->fields.begin(), cloud->fields.end(),
+                                   [](const sensor_msgs::PointField& f) { return f.name == "rgb"; });
+  ASSERT_TRUE(has_rgb) << "the cloud has no rgb field";
+  constexpr double kClear_m = 0.04;
+  constexpr int kMaxLevelDifference = 12;
+  size_t checked = 0, agreeing = 0;
+  sensor_msgs::PointCloud2ConstIterator<float> x(*cloud, "x"), y(*cloud, "y"), z(*cloud, "z");
+  sensor_msgs::PointCloud2ConstIterator<uint8_t> r(*cloud, "r"), g(*cloud, "g"), b(*cloud, "b");
+  for (; x != x.end(); ++x, ++y, ++z, ++r, ++g, ++b) {
+    const Eigen::Vector3d p_world = T_map_world.inverse() * Eigen::Vector3d(*x, *y, *z);
+    const Eigen::Vector3d in_tile = p_world / st::synthetic::kColourTile_m;
+    const Eigen::Vector3d to_edge = (in_tile.array() - in_tile.array().round()).abs() * st::synthetic::kColourTile_m;
+    if (to_edge.minCoeff() < kClear_m) continue;
+    const st::Rgb expected = st::synthetic::surfaceColour(p_world);
+    ++checked;
+    agreeing += std::abs(*r - expected[0]) <= kMaxLevelDifference && std::abs(*g - expected[1]) <= kMaxLevelDifference &&
+                std::abs(*b - expected[2]) <= kMaxLevelDifference;
+  }
+  std::cout << "[ figures  ] cloud colours: " << agreeing << " of " << checked
+            << " points clear of the tiles' edges within " << kMaxLevelDifference << " levels of the scene's\n";
+  EXPECT_GT(checked, 1000u);
+  EXPECT_GT(agreeing, 0.9 * checked) << "the cloud does not carry the bag's colours";
 }
 
 /// Every ~odom message, and the worst level each diagnostic status reached while frames came.

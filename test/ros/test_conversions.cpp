@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <limits>
 #include <map>
 #include <memory>
@@ -71,6 +72,72 @@ TEST(Conversions, UnreadableImagesNameTheProblem) {
   EXPECT_THROW(toCamera(info), std::invalid_argument);
   info.K = {525, 0, 319.5, 0, 525, 239.5, 0, 0, 1};
   EXPECT_DOUBLE_EQ(toCamera(info).cx, 319.5);
+}
+
+TEST(Conversions, ColourImagesOfEveryEncodingAreReadAsRgbAndOthersAreRefusedByName) {
+  // One pixel of red 10, green 20, blue 30 in each encoding (grey: 20).
+  const std::map<std::string, std::vector<uint8_t>> pixels = {
+      {"rgb8", {10, 20, 30}}, {"bgr8", {30, 20, 10}}, {"rgba8", {10, 20, 30, 255}}, {"bgra8", {30, 20, 10, 255}},
+      {"mono8", {20}}};
+  for (const auto& [encoding, pixel] : pixels) {
+    sensor_msgs::Image msg;
+    msg.width = 3;
+    msg.height = 2;
+    msg.encoding = encoding;
+    msg.step = static_cast<uint32_t>(3 * pixel.size() + 2);  // rows padded
+    msg.data.assign(msg.step * msg.height, 0);
+    for (int v = 0; v < 2; ++v)
+      for (int u = 0; u < 3; ++u) std::copy(pixel.begin(), pixel.end(), &msg.data[v * msg.step + u * pixel.size()]);
+    const sdf_tracker::ColourImage colour = toColourImage(msg);
+    ASSERT_EQ(colour.width(), 3);
+    const uint8_t* c = colour.at(2, 1);
+    if (encoding == "mono8") {
+      EXPECT_EQ(std::vector<uint8_t>(c, c + 3), (std::vector<uint8_t>{20, 20, 20})) << encoding;
+    } else {
+      EXPECT_EQ(std::vector<uint8_t>(c, c + 3), (std::vector<uint8_t>{10, 20, 30})) << encoding;
+    }
+  }
+  sensor_msgs::Image msg = toImageMsg(sdf_tracker::ColourImage(4, 2, 7), std_msgs::Header());
+  EXPECT_EQ(msg.encoding, "rgb8");
+  EXPECT_EQ(toColourImage(msg).at(3, 1)[2], 7) << "rgb8 round trip";
+  msg.encoding = "16UC1";
+  try {
+    toColourImage(msg);
+    FAIL() << "a 16UC1 image was taken for colour";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("unsupported colour encoding \"16UC1\""), std::string::npos) << e.what();
+  }
+  msg.encoding = "rgb8";
+  msg.data.resize(10);
+  EXPECT_THROW(toColourImage(msg), std::invalid_argument) << "fewer bytes than its size";
+}
+
+TEST(Conversions, CloudAndMeshCarryTheirColoursToRviz) {
+  sdf_tracker::SurfaceCloud cloud;
+  cloud.points_W = {Eigen::Vector3f(1, 2, 3), Eigen::Vector3f(4, 5, 6)};
+  cloud.normals_W = {Eigen::Vector3f::UnitZ(), Eigen::Vector3f::UnitX()};
+  const sensor_msgs::PointCloud2 grey = toCloudMsg(cloud, std_msgs::Header());
+  EXPECT_TRUE(std::none_of(grey.fields.begin(), grey.fields.end(), [](const auto& f) { return f.name == "rgb"; }));
+  cloud.colours = {{200, 10, 20}, {1, 2, 3}};
+  const sensor_msgs::PointCloud2 coloured = toCloudMsg(cloud, std_msgs::Header());
+  const auto rgb = std::find_if(coloured.fields.begin(), coloured.fields.end(), [](const auto& f) { return f.name == "rgb"; });
+  ASSERT_NE(rgb, coloured.fields.end()) << "rviz's RGB8 transformer reads the rgb field";
+  // PCL packs rgb as b, g, r, a bytes (little-endian 0xAARRGGBB).
+  const uint8_t* first = &coloured.data[rgb->offset];
+  EXPECT_EQ(std::vector<uint8_t>(first, first + 3), (std::vector<uint8_t>{20, 10, 200}));
+  EXPECT_EQ(coloured.width * coloured.height, 2u);
+
+  sdf_tracker::TriangleMesh mesh;
+  mesh.vertices_W = {Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 0, 0), Eigen::Vector3f(0, 1, 0)};
+  mesh.normals_W.assign(3, Eigen::Vector3f::UnitZ());
+  mesh.triangles = {Eigen::Vector3i(0, 1, 2)};
+  EXPECT_TRUE(toMarker(mesh, std_msgs::Header()).colors.empty()) << "no colours: the marker's one grey";
+  mesh.colours = {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}};
+  const visualization_msgs::Marker marker = toMarker(mesh, std_msgs::Header());
+  ASSERT_EQ(marker.colors.size(), 3u) << "one colour per point of the triangle list";
+  EXPECT_FLOAT_EQ(marker.colors[1].g, 1.0f);
+  EXPECT_FLOAT_EQ(marker.colors[2].b, 1.0f);
+  EXPECT_FLOAT_EQ(marker.colors[2].a, 1.0f);
 }
 
 TEST(Conversions, CameraInfoRoundTripsThroughTheCamera) {

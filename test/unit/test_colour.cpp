@@ -11,6 +11,7 @@
 #include <string>
 #include <tuple>
 
+#include "sdf_tracker/eval/colour_agreement.h"
 #include "sdf_tracker/fusion/integrator.h"
 #include "sdf_tracker/io/colour_image_file.h"
 #include "sdf_tracker/io/depth_png.h"
@@ -428,6 +429,57 @@ TEST(PipelineColour, TheTrajectoryIsTheSameWithColourAndWithoutAndABadColourImag
   EXPECT_TRUE(bad.track.tracked()) << "the depth is tracked and fused all the same";
   EXPECT_FALSE(bad.coloured);
   EXPECT_NE(bad.colour_problem.find("the colour image is 322x240"), std::string::npos) << bad.colour_problem;
+}
+
+}  // namespace
+}  // namespace sdf_tracker
+
+namespace sdf_tracker {
+namespace {
+
+TEST(ColourAgreement, AMeshColouredFromItsImagesAgreesWithThemAndOneColouredWronglyDoesNot) {
+  // A TUM folder of a flat wall 1.5 m in front of the camera, half red and half blue.
+  const std::string dir = test::scratchDirectory("colour_agreement");
+  const PinholeCamera camera = test::testCamera();
+  std::filesystem::create_directories(dir + "/depth");
+  std::filesystem::create_directories(dir + "/rgb");
+  std::ofstream depth_list(dir + "/depth.txt"), colour_list(dir + "/rgb.txt");
+  const DepthImage depth(camera.width, camera.height, 1.5f);
+  const ColourImage colour = twoColoured(camera, 150);
+  std::vector<io::StampedPose> trajectory;
+  for (int i = 0; i < 4; ++i) {
+    const std::string stamp = std::to_string(20 + i * 0.1);
+    io::writeDepthPng(dir + "/depth/" + stamp + ".png", depth, 5000.0);
+    io::writeColourImage(dir + "/rgb/" + stamp + ".png", colour);
+    depth_list << stamp << " depth/" << stamp << ".png\n";
+    colour_list << stamp << " rgb/" << stamp << ".png\n";
+    trajectory.push_back({20 + i * 0.1, Eigen::Isometry3d::Identity()});
+  }
+  depth_list.close();
+  colour_list.close();
+  std::ofstream(dir + "/intrinsics.txt") << camera.fx << " " << camera.fy << " " << camera.cx << " " << camera.cy << " "
+                                         << camera.width << " " << camera.height << " 5000\n";
+  const TumSequence sequence = TumSequence::open(dir);
+
+  VolumeConfig config;
+  config.type = MapType::kSparse;
+  config.voxel_size_m = 0.02;
+  SparseTsdfMap map(config);
+  for (int i = 0; i < 4; ++i) {
+    Integrator(IntegratorConfig{}).integrate(depth, camera, Eigen::Isometry3d::Identity(), &map, &colour);
+  }
+  TriangleMesh mesh = extractMesh(map);
+  const evaluation::ColourAgreement good = evaluation::compareMeshColours(mesh, sequence, trajectory, 1);
+  EXPECT_EQ(good.frames, 4u);
+  EXPECT_GT(good.comparisons, 4000u);
+  EXPECT_LT(good.mean_channel_difference, 5.0) << "only vertices at the boundary differ";
+  EXPECT_EQ(good.median_distance, 0.0);
+
+  for (Rgb& c : mesh.colours) c = c == kRed ? kBlue : kRed;
+  const evaluation::ColourAgreement swapped = evaluation::compareMeshColours(mesh, sequence, trajectory, 1);
+  EXPECT_GT(swapped.mean_channel_difference, 100.0);
+  mesh.colours.clear();
+  EXPECT_THROW(evaluation::compareMeshColours(mesh, sequence, trajectory, 1), std::invalid_argument);
 }
 
 }  // namespace

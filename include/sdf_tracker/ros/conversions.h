@@ -8,6 +8,7 @@
 #include <visualization_msgs/Marker.h>
 
 #include "sdf_tracker/camera/camera.h"
+#include "sdf_tracker/camera/colour_image.h"
 #include "sdf_tracker/camera/depth_image.h"
 #include "sdf_tracker/surface/surface.h"
 
@@ -21,6 +22,12 @@ sdf_tracker::DepthImage toDepthImage(const sensor_msgs::Image& msg);
 
 /// A 32FC1 image in metres (NaN where there is no measurement).
 sensor_msgs::Image toImageMsg(const sdf_tracker::DepthImage& depth, const std_msgs::Header& header);
+
+/// Converts a colour image (rgb8, bgr8, rgba8, bgra8 or mono8) to RGB. Throws
+/// std::invalid_argument naming the encoding or the inconsistency (step, size).
+sdf_tracker::ColourImage toColourImage(const sensor_msgs::Image& msg);
+/// An rgb8 image.
+sensor_msgs::Image toImageMsg(const sdf_tracker::ColourImage& colour, const std_msgs::Header& header);
 
 /// Intrinsics (K) and lens distortion (D, plumb_bob or rational_polynomial without k4..k6) from
 /// camera_info; throws std::invalid_argument for a zero or non-finite K or size, or a distortion
@@ -49,7 +56,8 @@ sdf_tracker::PinholeCamera trackingCamera(const sensor_msgs::CameraInfo& info, c
 geometry_msgs::Pose toPoseMsg(const Eigen::Isometry3d& T);
 Eigen::Isometry3d fromPoseMsg(const geometry_msgs::Pose& pose);
 
-/// A triangle-list marker of the mesh; `T_frame_W` places the tracker's world in header.frame_id.
+/// A triangle-list marker of the mesh, in its vertex colours when it has them (else one grey);
+/// `T_frame_W` places the tracker's world in header.frame_id.
 visualization_msgs::Marker toMarker(const sdf_tracker::TriangleMesh& mesh, const std_msgs::Header& header,
                                     const Eigen::Isometry3d& T_frame_W = Eigen::Isometry3d::Identity());
 
@@ -58,7 +66,8 @@ visualization_msgs::Marker toMarker(const sdf_tracker::TriangleMesh& mesh, const
 #include <sensor_msgs/PointCloud2.h>
 
 namespace sdf_tracker_ros {
-/// Surface points with normals as PointCloud2 (x y z normal_x normal_y normal_z), built with PCL.
+/// Surface points with normals as PointCloud2 (x y z normal_x normal_y normal_z, and rgb when the
+/// cloud has colours, as rviz's RGB8 colour transformer reads it), built with PCL.
 /// Implemented in its own translation unit so that only one file compiles PCL.
 /// `T_frame_W` places the tracker's world in header.frame_id (points and normals are transformed).
 sensor_msgs::PointCloud2 toCloudMsg(const sdf_tracker::SurfaceCloud& cloud, const std_msgs::Header& header,

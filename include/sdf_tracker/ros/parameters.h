@@ -27,6 +27,15 @@ struct NodeOptions {
   std::string preset = "default";
   std::string camera_name = "camera";  ///< c_name
   bool depth_registered = false;
+  /// The colour images the map is coloured from (with Colour on); empty: <c_name>/rgb/image_color.
+  std::string colour_topic;
+  /// The depth is registered to the colour images, pixel for pixel, though not on a
+  /// depth_registered topic (the TUM RGB-D benchmark's bags: TUM registered them). Colour is used
+  /// only with this or depth_registered.
+  bool colour_registered = false;
+  /// Whether the depth is registered to the colour images: stated (colour_registered) or the
+  /// driver's depth_registered stream.
+  bool colourUsable() const { return depth_registered || colour_registered; }
   FrameOptions frames;
   std::string imu_topic;  ///< optional: level the map frame with gravity from this IMU
   double cloud_rate_hz = 1.0;

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <condition_variable>
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -28,7 +29,9 @@ namespace sdf_tracker_ros {
 
 /// The ROS node over sdf_tracker::SdfPipeline, used by both the node and the nodelet. It only
 /// composes its parts: frames in (a one-slot mailbox drained by a frame thread: the newest frame
-/// is always the next one tracked, and every frame replaced unprocessed is counted as dropped),
+/// is always the next one tracked, and every frame replaced unprocessed is counted as dropped;
+/// with Colour on, the colour images in a short cache, each depth frame fused with the one
+/// nearest in stamp when it is processed, never waiting for one),
 /// PoseBroadcaster (tf, ~pose, ~path; nothing while the camera is searched for in the map),
 /// MapPublisher (~cloud, ~mesh on their own thread), MapServices, pose requests (~initialpose),
 /// NodeDiagnostics (/diagnostics) and live reconfiguration through the parameter table.
@@ -51,6 +54,12 @@ class TrackerServer {
   };
 
   void onFrame(const sensor_msgs::ImageConstPtr& image, const sensor_msgs::CameraInfoConstPtr& info);
+  void onColour(const sensor_msgs::ImageConstPtr& image);
+  /// Subscribes to the colour images (Colour on) or lets them go (off).
+  void updateColourSubscription(bool colour_on);
+  /// The cached colour image nearest to `stamp`, within kMaxColourGap_s, as RGB; nothing when
+  /// there is none (or it cannot be read: said in the log, throttled).
+  std::optional<sdf_tracker::ColourImage> colourAt(const ros::Time& stamp);
   void frameLoop();
   void process(const Frame& frame);
   /// The camera of `frame` (camera_info or the parameters); throws std::invalid_argument with the
@@ -83,9 +92,14 @@ class TrackerServer {
   /// request waits in pending_pose_request_ for the next frame.
   ros::Subscriber initial_pose_sub_;
   std::string depth_topic_, info_topic_;
+  image_transport::Subscriber colour_sub_;
+  std::string colour_topic_;
   std::mutex mailbox_mutex_;  ///< guards the members down to stopping_
   std::condition_variable mailbox_changed_;
   std::optional<Frame> pending_;
+  /// The latest colour images, oldest first (kColourCache of them at most).
+  std::deque<sensor_msgs::ImageConstPtr> colour_cache_;
+  uint32_t colour_received_ = 0;
   std::optional<geometry_msgs::PoseWithCovarianceStamped> pending_pose_request_;
   /// The last request received, and when: the same pose again within kRepeatedRequest_s is a
   /// repeat (a burst from a script, a latched topic), not a new request to verify from scratch.
@@ -113,6 +127,7 @@ class TrackerServer {
   bool lost_ = false;
   /// The camera's pose is not known (a loaded map, ~relocalise): it is searched for, not lost.
   bool searching_ = false;
+  uint32_t frames_coloured_ = 0;
 
   std::unique_ptr<NodeDiagnostics> diagnostics_;
   std::unique_ptr<MapServices> services_;

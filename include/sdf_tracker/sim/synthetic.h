@@ -10,9 +10,11 @@
 #include <Eigen/Geometry>
 
 #include "sdf_tracker/camera/camera.h"
+#include "sdf_tracker/camera/colour_image.h"
 #include "sdf_tracker/camera/depth_image.h"
 #include "sdf_tracker/io/trajectory_file.h"
 #include "sdf_tracker/sim/wheel_odometry.h"
+#include "sdf_tracker/surface/surface.h"
 
 /// Analytic indoor scenes rendered along scripted camera paths, with exact ground truth: the
 /// project's own test data and the default sequence of the main job.
@@ -145,10 +147,21 @@ struct SequenceSpec {
   double depth_factor = 5000.0;
   /// Also write odometry.txt: the camera's poses as a wheel odometry of this model reports them.
   std::optional<WheelOdometryModel> odometry;
+  /// Also write rgb/ and rgb.txt: colour images registered to the depth (renderColour), at the
+  /// depth's timestamps.
+  bool colour = false;
 };
 
+/// The colour of every scene's surfaces at p_W: tiles of kColourTile_m along each world axis,
+/// each one of six colours, so that a map's colours can be checked against it anywhere.
+constexpr double kColourTile_m = 0.25;
+Rgb surfaceColour(const Eigen::Vector3d& p_W);
+/// What a colour camera registered to the depth camera sees from T_W_C: the surface colour at
+/// each pixel's exact depth; black where the ray meets nothing.
+ColourImage renderColour(const Scene& scene, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C);
+
 /// Writes depth/, depth.txt, groundtruth.txt, intrinsics.txt and accelerometer.txt (and
-/// odometry.txt) under `directory` (created).
+/// odometry.txt, rgb/ and rgb.txt) under `directory` (created).
 void writeSequence(const std::string& directory, const SequenceSpec& spec);
 
 /// Writes render(i), taken at poses[i], as depth/ and depth.txt (headed by `comment`), with
