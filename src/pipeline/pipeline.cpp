@@ -523,14 +523,22 @@ void SdfPipeline::dropSearchMap() {
 }
 
 FrameReport SdfPipeline::processFrame(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s,
-                                      const std::optional<Eigen::Isometry3d>& T_odom_C, const ColourImage* colour) {
-  return process(depth, camera, timestamp_s, std::nullopt, T_odom_C, colour);
+                                      const std::optional<Eigen::Isometry3d>& T_odom_C, FrameColour colour) {
+  return process(depth, camera, timestamp_s, std::nullopt, T_odom_C, &colour);
 }
 
 FrameReport SdfPipeline::processFrameAtPose(const DepthImage& depth, const PinholeCamera& camera,
                                             const Eigen::Isometry3d& T_W_C, double timestamp_s,
-                                            const ColourImage* colour) {
-  return process(depth, camera, timestamp_s, T_W_C, std::nullopt, colour);
+                                            FrameColour colour) {
+  return process(depth, camera, timestamp_s, T_W_C, std::nullopt, &colour);
+}
+
+const ColourImage* FrameColour::get() {
+  if (image_ || !later_) return image_;
+  fetched_ = later_();
+  later_ = nullptr;
+  image_ = fetched_ ? &*fetched_ : nullptr;
+  return image_;
 }
 
 const ColourImage* SdfPipeline::prepareColour(const ColourImage* colour, const DepthImage& depth,
@@ -547,7 +555,7 @@ const ColourImage* SdfPipeline::prepareColour(const ColourImage* colour, const D
 
 FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s,
                                  const std::optional<Eigen::Isometry3d>& given_T_W_C,
-                                 const std::optional<Eigen::Isometry3d>& T_odom_C, const ColourImage* colour) {
+                                 const std::optional<Eigen::Isometry3d>& T_odom_C, FrameColour* colour) {
   FrameReport report;
   report.track.T_W_C = T_W_C_;
   const std::string mismatch = camera.sizeMismatch(depth.width(), depth.height());
@@ -557,7 +565,6 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     return report;
   }
   const DepthImage filtered = prepareDepth(depth, camera);
-  const ColourImage* colour_in = prepareColour(colour, depth, camera, &report);
   const PinholeCamera ideal_camera = camera.withoutDistortion();  // the camera of the prepared image
   if (filtered.countMeasurements() == 0) {
     report.track.status = TrackStatus::kBadInput;
@@ -702,6 +709,9 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     const auto start = std::chrono::steady_clock::now();
     // Fusion must find every block of its view in memory: a swapped one would be made anew.
     restoreNear(T_W_C_, ideal_camera, furthest_m, &report);
+    // Asked only now: a colour image that came while the frame was tracked is still used.
+    const ColourImage* colour_in =
+        config_.fuse_colour ? prepareColour(colour->get(), depth, camera, &report) : nullptr;
     integrator_->integrate(filtered, ideal_camera, T_W_C_, map_.get(), colour_in);
     report.coloured = colour_in != nullptr;
     ++active_.frames_fused;

@@ -10,7 +10,7 @@
 namespace sdf_tracker_ros {
 
 sensor_msgs::PointCloud2 toCloudMsg(const sdf_tracker::SurfaceCloud& cloud, const std_msgs::Header& header,
-                                    const Eigen::Isometry3d& T_frame_W) {
+                                    const Eigen::Isometry3d& T_frame_W, bool rgb_field) {
   const Eigen::Isometry3f T = T_frame_W.cast<float>();
   // PointNormal, or PointXYZRGBNormal when the cloud has colours: the same points either way.
   const auto fill = [&](auto& points, auto&& colour) {
@@ -34,15 +34,17 @@ sensor_msgs::PointCloud2 toCloudMsg(const sdf_tracker::SurfaceCloud& cloud, cons
     msg.header = header;
     return msg;
   };
-  if (cloud.colours.empty()) {
+  const bool coloured = !cloud.colours.empty();
+  if (!coloured && !rgb_field) {
     pcl::PointCloud<pcl::PointNormal> points;
     return fill(points, [](size_t, pcl::PointNormal*) {});
   }
   pcl::PointCloud<pcl::PointXYZRGBNormal> points;
-  return fill(points, [&cloud](size_t i, pcl::PointXYZRGBNormal* p) {
-    p->r = cloud.colours[i][0];
-    p->g = cloud.colours[i][1];
-    p->b = cloud.colours[i][2];
+  return fill(points, [&cloud, coloured](size_t i, pcl::PointXYZRGBNormal* p) {
+    const sdf_tracker::Rgb& c = coloured ? cloud.colours[i] : sdf_tracker::kUnseenColour;
+    p->r = c[0];
+    p->g = c[1];
+    p->b = c[2];
     p->a = 255;
   });
 }

@@ -142,7 +142,7 @@ void MapPublisher::run() {
     header.stamp = stamp_();
     header.frame_id = map_frame_;
     const Eigen::Isometry3d T_map_W = T_map_W_();
-    if (cloud_due) cloud_pub_.publish(toCloudMsg(st::extractSurfaceCloud(*map), header, T_map_W));
+    if (cloud_due) cloud_pub_.publish(toCloudMsg(st::extractSurfaceCloud(*map), header, T_map_W, colour_));
     if (mesh_due) mesh_pub_.publish(toMarker(st::extractMesh(*map), header, T_map_W));
     if (mesh_blocks_due) publishMeshBlocks(*map, header, T_map_W);
   }

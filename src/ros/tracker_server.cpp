@@ -90,6 +90,7 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
         return state_.last_stamp;
       },
       options_.frames.map_frame, options_.cloud_rate_hz, options_.mesh_rate_hz);
+  map_publisher_->setColour(settings.pipeline.fuse_colour && options_.colourUsable());
 
   // Start the reconfigure server from our values, not the cfg file's defaults.
   toReconfigureConfig(settings).__toServer__(pnh_);
@@ -331,8 +332,6 @@ void TrackerServer::process(const Frame& frame) {
     return drop(mismatch);
   }
 
-  // The colour image taken with it, if one has come (depth never waits for colour).
-  const std::optional<st::ColourImage> colour = colourAt(image.header.stamp);
   // The robot's odometry at this image (~odom_frame), looked up before the state is locked: it may
   // wait for tf.
   const std::optional<Eigen::Isometry3d> T_odom_C = poses_->odometryCameraPose(image.header.stamp, image.header.frame_id);
@@ -373,8 +372,11 @@ void TrackerServer::process(const Frame& frame) {
       pose_request.swap(pending_pose_request_);
     }
     if (pose_request) applyPoseRequest(*pose_request, image.header.frame_id);
-    report = state_.pipeline->processFrame(depth, camera, image.header.stamp.toSec(), T_odom_C,
-                                           colour ? &*colour : nullptr);
+    // The colour image taken with it, looked for when the frame is fused: one that comes while the
+    // frame is tracked is still used, and depth never waits for colour.
+    const ros::Time stamp = image.header.stamp;
+    report = state_.pipeline->processFrame(depth, camera, stamp.toSec(), T_odom_C,
+                                           st::FrameColour([this, stamp] { return colourAt(stamp); }));
     if (report.track.status == st::TrackStatus::kBadInput) {
       return drop(report.track.message);
     }
@@ -534,6 +536,7 @@ void TrackerServer::reconfigure(sdf_tracker::SdfTrackerConfig& config, uint32_t 
     st::throwIfInvalid("reconfiguration", candidate.validate());
     state_.pipeline->updateConfig(candidate.pipeline);  // validates again; changes nothing when it throws
     updateColourSubscription(candidate.pipeline.fuse_colour);
+    map_publisher_->setColour(candidate.pipeline.fuse_colour && options_.colourUsable());
     ROS_INFO("sdf_tracker: reconfigured");
   } catch (const std::invalid_argument& e) {
     ROS_ERROR("sdf_tracker: rejected reconfiguration: %s", e.what());

@@ -118,6 +118,10 @@ TEST(Conversions, CloudAndMeshCarryTheirColoursToRviz) {
   cloud.normals_W = {Eigen::Vector3f::UnitZ(), Eigen::Vector3f::UnitX()};
   const sensor_msgs::PointCloud2 grey = toCloudMsg(cloud, std_msgs::Header());
   EXPECT_TRUE(std::none_of(grey.fields.begin(), grey.fields.end(), [](const auto& f) { return f.name == "rgb"; }));
+  // Asked for, an rgb field even without colours, even without points: rviz keeps its RGB8.
+  const sensor_msgs::PointCloud2 empty = toCloudMsg(sdf_tracker::SurfaceCloud(), std_msgs::Header(),
+                                                    Eigen::Isometry3d::Identity(), true);
+  EXPECT_TRUE(std::any_of(empty.fields.begin(), empty.fields.end(), [](const auto& f) { return f.name == "rgb"; }));
   cloud.colours = {{200, 10, 20}, {1, 2, 3}};
   const sensor_msgs::PointCloud2 coloured = toCloudMsg(cloud, std_msgs::Header());
   const auto rgb = std::find_if(coloured.fields.begin(), coloured.fields.end(), [](const auto& f) { return f.name == "rgb"; });

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <functional>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -99,6 +100,25 @@ constexpr double kOdometryHeadingDrift_rad_per_m = 0.02;
 MotionPrior::Odometry odometryPrior(const Eigen::Isometry3d& T_W_C_predicted, const Eigen::Isometry3d& motion,
                                     double odometry_error);
 
+/// A frame's colour image, registered to its depth, or where to get it: `later` is asked once,
+/// when the frame is fused, after it is tracked, so that a colour image that arrives while the
+/// frame is tracked still colours it (a camera's colour images come a few milliseconds before or
+/// after the depth they go with). None: default-constructed, a null image, or `later` returning
+/// nothing.
+class FrameColour {
+ public:
+  FrameColour() = default;
+  FrameColour(const ColourImage* image) : image_(image) {}  // NOLINT(runtime/explicit): the common case
+  explicit FrameColour(std::function<std::optional<ColourImage>()> later) : later_(std::move(later)) {}
+  /// The image given, or the one `later` returns now (asked once, then kept); nullptr: none.
+  const ColourImage* get();
+
+ private:
+  const ColourImage* image_ = nullptr;
+  std::function<std::optional<ColourImage>()> later_;
+  std::optional<ColourImage> fetched_;
+};
+
 /// A frame that went to the relocaliser (FrameReport::relocalisation).
 struct RelocalisationReport {
   bool searched = false;  ///< the frame was searched with (the camera's pose was not known)
@@ -194,7 +214,7 @@ class SdfPipeline {
   FrameReport processFrame(const DepthImage& depth, const PinholeCamera& camera,
                            double timestamp_s = std::numeric_limits<double>::quiet_NaN(),
                            const std::optional<Eigen::Isometry3d>& T_odom_C = std::nullopt,
-                           const ColourImage* colour = nullptr);
+                           FrameColour colour = FrameColour());
 
   /// Measures the tracker alone: tracks the frame from the given pose T_W_C (e.g. the true one),
   /// reports where the tracker took it, and then fuses the frame at the given pose, whatever the
@@ -203,7 +223,7 @@ class SdfPipeline {
   /// given pose places the map (sdf_tracker_offline --fuse-ground-truth).
   FrameReport processFrameAtPose(const DepthImage& depth, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C,
                                  double timestamp_s = std::numeric_limits<double>::quiet_NaN(),
-                                 const ColourImage* colour = nullptr);
+                                 FrameColour colour = FrameColour());
 
   /// Camera to world at the last accepted frame.
   const Eigen::Isometry3d& pose() const { return T_W_C_; }
@@ -292,7 +312,7 @@ class SdfPipeline {
   /// processFrame, or with given_T_W_C processFrameAtPose.
   FrameReport process(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s,
                       const std::optional<Eigen::Isometry3d>& given_T_W_C,
-                      const std::optional<Eigen::Isometry3d>& T_odom_C, const ColourImage* colour);
+                      const std::optional<Eigen::Isometry3d>& T_odom_C, FrameColour* colour);
   /// The colour image as the integrator takes it (undistorted as the depth, in colour_buffer_),
   /// or nullptr when there is none, colour is off, or it does not fit the depth (said in the
   /// report).

@@ -66,10 +66,13 @@ visualization_msgs::Marker toMarker(const sdf_tracker::TriangleMesh& mesh, const
 #include <sensor_msgs/PointCloud2.h>
 
 namespace sdf_tracker_ros {
-/// Surface points with normals as PointCloud2 (x y z normal_x normal_y normal_z, and rgb when the
-/// cloud has colours, as rviz's RGB8 colour transformer reads it), built with PCL.
+/// Surface points with normals as PointCloud2 (x y z normal_x normal_y normal_z, and rgb, as rviz's
+/// RGB8 colour transformer reads it, when the cloud has colours or `rgb_field` asks for one: then
+/// kUnseenColour for a cloud without, even an empty one, so that rviz keeps its RGB8 transformer,
+/// which it gives up at the first cloud without the field), built with PCL.
 /// Implemented in its own translation unit so that only one file compiles PCL.
 /// `T_frame_W` places the tracker's world in header.frame_id (points and normals are transformed).
 sensor_msgs::PointCloud2 toCloudMsg(const sdf_tracker::SurfaceCloud& cloud, const std_msgs::Header& header,
-                                    const Eigen::Isometry3d& T_frame_W = Eigen::Isometry3d::Identity());
+                                    const Eigen::Isometry3d& T_frame_W = Eigen::Isometry3d::Identity(),
+                                    bool rgb_field = false);
 }  // namespace sdf_tracker_ros

@@ -55,6 +55,10 @@ class MapPublisher {
                double cloud_rate_hz, double mesh_rate_hz);
   ~MapPublisher();
 
+  /// With Colour on, ~cloud always carries an rgb field (grey, kUnseenColour, before the map holds
+  /// colour): rviz's RGB8 colour transformer, once it met a cloud without, would not come back.
+  void setColour(bool colour_on) { colour_ = colour_on; }
+
  private:
   void run();
   /// ~mesh_blocks: the chunks that changed since the last call (all after a restart).
@@ -71,6 +75,7 @@ class MapPublisher {
   std::condition_variable wake_;
   bool stopping_ = false;
   std::atomic<bool> resend_mesh_blocks_{true};  ///< a new subscriber needs every chunk
+  std::atomic<bool> colour_{false};
   sdf_tracker::ChunkedMesher mesher_;
   std::unordered_map<uint64_t, int> chunk_marker_ids_;  ///< chunk key -> marker id
   Eigen::Isometry3d mesh_blocks_T_map_W_ = Eigen::Isometry3d::Identity();

@@ -31,7 +31,7 @@ namespace sdf_tracker_ros {
 /// composes its parts: frames in (a one-slot mailbox drained by a frame thread: the newest frame
 /// is always the next one tracked, and every frame replaced unprocessed is counted as dropped;
 /// with Colour on, the colour images in a short cache, each depth frame fused with the one
-/// nearest in stamp when it is processed, never waiting for one),
+/// nearest in stamp when it is fused, after tracking, never waiting for one),
 /// PoseBroadcaster (tf, ~pose, ~path; nothing while the camera is searched for in the map),
 /// MapPublisher (~cloud, ~mesh on their own thread), MapServices, pose requests (~initialpose),
 /// NodeDiagnostics (/diagnostics) and live reconfiguration through the parameter table.
