@@ -332,6 +332,30 @@ TEST(MapColour, IsSavedInTheMapFilesAndTheMeshAndAnOlderMapFileLoadsWithout) {
   EXPECT_EQ(io::describeLoadedColour(map, true), "");
 }
 
+/// A TUM folder of `frames` depth images of a flat wall 1.5 m in front of the test camera, 0.1 s
+/// apart from first_s, with intrinsics.txt; given `colour`, that image with every frame in rgb.txt.
+std::string wallFolder(const std::string& name, int frames, double first_s, const ColourImage* colour) {
+  const std::string dir = test::scratchDirectory(name);
+  const PinholeCamera camera = test::testCamera();
+  std::filesystem::create_directories(dir + "/depth");
+  std::filesystem::create_directories(dir + "/rgb");
+  std::ofstream depth_list(dir + "/depth.txt"), colour_list;
+  depth_list << "# depth maps\n";
+  if (colour) colour_list.open(dir + "/rgb.txt");
+  const DepthImage depth(camera.width, camera.height, 1.5f);
+  for (int i = 0; i < frames; ++i) {
+    const std::string stamp = std::to_string(first_s + i * 0.1);
+    io::writeDepthPng(dir + "/depth/" + stamp + ".png", depth, 5000.0);
+    depth_list << stamp << " depth/" << stamp << ".png\n";
+    if (!colour) continue;
+    io::writeColourImage(dir + "/rgb/" + stamp + ".png", *colour);
+    colour_list << stamp << " rgb/" << stamp << ".png\n";
+  }
+  std::ofstream(dir + "/intrinsics.txt") << camera.fx << " " << camera.fy << " " << camera.cx << " " << camera.cy << " "
+                                         << camera.width << " " << camera.height << " 5000\n";
+  return dir;
+}
+
 TEST(TumColour, DepthAndColourArePairedClosestFirstOncePerImageWithinTwentyMilliseconds) {
   // associate.py's rule: the closest pairs first, each image in one pair at most.
   const std::vector<long> partner = associateByTime({1.000, 1.012, 1.100, 2.000}, {1.008, 1.050, 1.115, 2.0201}, 0.02);
@@ -343,27 +367,12 @@ TEST(TumColour, DepthAndColourArePairedClosestFirstOncePerImageWithinTwentyMilli
 }
 
 TEST(TumColour, AFolderWithRgbTxtGivesEachDepthFrameItsColourImageAndNamesABadOne) {
-  const std::string dir = test::scratchDirectory("tum_colour");
+  const std::string dir = wallFolder("tum_colour", 3, 10.0, nullptr);
   const PinholeCamera camera = test::testCamera();
-  std::filesystem::create_directories(dir + "/depth");
-  std::filesystem::create_directories(dir + "/rgb");
-  std::ofstream depth_list(dir + "/depth.txt"), colour_list(dir + "/rgb.txt");
-  depth_list << "# depth maps\n";
-  colour_list << "# color images\n";
-  const DepthImage depth(camera.width, camera.height, 1.5f);
-  for (int i = 0; i < 3; ++i) {
-    const std::string stamp = std::to_string(10 + i * 0.1);
-    io::writeDepthPng(dir + "/depth/" + stamp + ".png", depth, 5000.0);
-    depth_list << stamp << " depth/" << stamp << ".png\n";
-  }
   io::writeColourImage(dir + "/rgb/a.png", twoColoured(camera, 50));
   io::writeColourImage(dir + "/rgb/b.jpg", filled(camera, kBlue));
   io::writeColourImage(dir + "/rgb/small.png", ColourImage(camera.width / 2, camera.height / 2));
-  colour_list << "10.012 rgb/a.png\n10.093 rgb/b.jpg\n10.2 rgb/small.png\n";
-  depth_list.close();
-  colour_list.close();
-  std::ofstream(dir + "/intrinsics.txt") << camera.fx << " " << camera.fy << " " << camera.cx << " " << camera.cy << " "
-                                         << camera.width << " " << camera.height << " 5000\n";
+  std::ofstream(dir + "/rgb.txt") << "# color images\n10.012 rgb/a.png\n10.093 rgb/b.jpg\n10.2 rgb/small.png\n";
 
   const TumSequence sequence = TumSequence::open(dir);
   ASSERT_TRUE(sequence.hasColourList());
@@ -431,34 +440,14 @@ TEST(PipelineColour, TheTrajectoryIsTheSameWithColourAndWithoutAndABadColourImag
   EXPECT_NE(bad.colour_problem.find("the colour image is 322x240"), std::string::npos) << bad.colour_problem;
 }
 
-}  // namespace
-}  // namespace sdf_tracker
-
-namespace sdf_tracker {
-namespace {
-
 TEST(ColourAgreement, AMeshColouredFromItsImagesAgreesWithThemAndOneColouredWronglyDoesNot) {
-  // A TUM folder of a flat wall 1.5 m in front of the camera, half red and half blue.
-  const std::string dir = test::scratchDirectory("colour_agreement");
+  // A flat wall 1.5 m in front of the camera, half red and half blue, seen four times.
   const PinholeCamera camera = test::testCamera();
-  std::filesystem::create_directories(dir + "/depth");
-  std::filesystem::create_directories(dir + "/rgb");
-  std::ofstream depth_list(dir + "/depth.txt"), colour_list(dir + "/rgb.txt");
   const DepthImage depth(camera.width, camera.height, 1.5f);
   const ColourImage colour = twoColoured(camera, 150);
+  const std::string dir = wallFolder("colour_agreement", 4, 20.0, &colour);
   std::vector<io::StampedPose> trajectory;
-  for (int i = 0; i < 4; ++i) {
-    const std::string stamp = std::to_string(20 + i * 0.1);
-    io::writeDepthPng(dir + "/depth/" + stamp + ".png", depth, 5000.0);
-    io::writeColourImage(dir + "/rgb/" + stamp + ".png", colour);
-    depth_list << stamp << " depth/" << stamp << ".png\n";
-    colour_list << stamp << " rgb/" << stamp << ".png\n";
-    trajectory.push_back({20 + i * 0.1, Eigen::Isometry3d::Identity()});
-  }
-  depth_list.close();
-  colour_list.close();
-  std::ofstream(dir + "/intrinsics.txt") << camera.fx << " " << camera.fy << " " << camera.cx << " " << camera.cy << " "
-                                         << camera.width << " " << camera.height << " 5000\n";
+  for (int i = 0; i < 4; ++i) trajectory.push_back({20 + i * 0.1, Eigen::Isometry3d::Identity()});
   const TumSequence sequence = TumSequence::open(dir);
 
   VolumeConfig config;
