@@ -218,11 +218,14 @@ bool MapServices::loadVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
     std::unique_ptr<st::TsdfMap> loaded = st::io::readMap(path, compact, &places, places_config, &T_map_W);
     std::lock_guard<std::mutex> lock(state_.mutex);
     const std::string held = st::io::describeLoadedPlaces(places.get(), state_.pipeline->config().relocalise);
+    const std::string grey =
+        st::io::describeLoadedColour(*loaded, state_.pipeline->config().fuse_colour && options_.colourUsable());
     state_.pipeline->setMap(std::move(loaded), std::move(places));
     state_.trajectory.clear();
     state_.restarted = true;
     if (T_map_W) poses_.restoreMapFrame(*T_map_W);
-    return "tracking against " + path + ", which " + held + "; " + describeLoadedMapFrame(T_map_W.has_value());
+    return "tracking against " + path + ", which " + held + "; " + describeLoadedMapFrame(T_map_W.has_value()) +
+           (grey.empty() ? "" : "; it " + grey);
   });
 }
 

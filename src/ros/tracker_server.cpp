@@ -71,6 +71,11 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
     std::unique_ptr<st::TsdfMap> map = st::io::readMap(options_.load_volume, settings.pipeline.volume.compact_voxels,
                                                        &places, settings.pipeline.places, &loaded_map_frame);
     const std::string held = st::io::describeLoadedPlaces(places.get(), settings.pipeline.relocalise);
+    if (const std::string grey =
+            st::io::describeLoadedColour(*map, settings.pipeline.fuse_colour && options_.colourUsable());
+        !grey.empty()) {
+      ROS_INFO("sdf_tracker: the map in %s %s", options_.load_volume.c_str(), grey.c_str());
+    }
     state_.pipeline->setMap(std::move(map), std::move(places));
     ROS_INFO("sdf_tracker: tracking against the map in %s (%s), which %s; %s", options_.load_volume.c_str(),
              state_.pipeline->config().volume.describe().c_str(), held.c_str(),

@@ -677,7 +677,7 @@ void writeSequence(const std::string& directory, const SequenceSpec& spec) {
 Rgb surfaceColour(const Eigen::Vector3d& p_W) {
   static constexpr Rgb kPalette[6] = {{200, 60, 50}, {60, 170, 70}, {50, 80, 200}, {220, 200, 60}, {150, 70, 170},
                                       {60, 180, 190}};
-  const Eigen::Vector3d tile = (p_W / kColourTile_m).array().floor();
+  const Eigen::Vector3d tile = ((p_W.array() - kColourTileOffset_m) / kColourTile_m).floor();
   const long index = static_cast<long>(tile.x()) + 2 * static_cast<long>(tile.y()) + 3 * static_cast<long>(tile.z());
   return kPalette[((index % 6) + 6) % 6];
 }

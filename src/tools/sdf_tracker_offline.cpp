@@ -232,6 +232,9 @@ int run(int argc, char** argv) {
         st::io::readMap(path, settings.pipeline.volume.compact_voxels, &places, settings.pipeline.places);
     std::cout << (places && !places->empty() ? "" : "note: ") << path << " "
               << st::io::describeLoadedPlaces(places.get(), settings.pipeline.relocalise) << "\n";
+    if (const std::string grey = st::io::describeLoadedColour(*map, read_colour); !grey.empty()) {
+      std::cout << "note: " << path << " " << grey << "\n";
+    }
     pipeline.setMap(std::move(map), std::move(places));
     // The file's grid replaces the configured one: the rules between parameters must hold for it.
     st::throwIfInvalid("parameters with the grid of " + path, st::Settings{pipeline.config(), settings.camera}.validate());

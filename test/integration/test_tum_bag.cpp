@@ -135,7 +135,8 @@ TEST_F(TumBagTest, PlaysAtRateOneWithOneParentPerFrameAndOfflineAccuracy) {
   sensor_msgs::PointCloud2ConstIterator<uint8_t> r(*cloud, "r"), g(*cloud, "g"), b(*cloud, "b");
   for (; x != x.end(); ++x, ++y, ++z, ++r, ++g, ++b) {
     const Eigen::Vector3d p_world = T_map_world.inverse() * Eigen::Vector3d(*x, *y, *z);
-    const Eigen::Vector3d in_tile = p_world / st::synthetic::kColourTile_m;
+    const Eigen::Vector3d in_tile =
+        (p_world.array() - st::synthetic::kColourTileOffset_m) / st::synthetic::kColourTile_m;
     const Eigen::Vector3d to_edge = (in_tile.array() - in_tile.array().round()).abs() * st::synthetic::kColourTile_m;
     if (to_edge.minCoeff() < kClear_m) continue;
     const st::Rgb expected = st::synthetic::surfaceColour(p_world);

@@ -153,8 +153,12 @@ struct SequenceSpec {
 };
 
 /// The colour of every scene's surfaces at p_W: tiles of kColourTile_m along each world axis,
-/// each one of six colours, so that a map's colours can be checked against it anywhere.
+/// each one of six colours, so that a map's colours can be checked against it anywhere. The tiles'
+/// edges lie kColourTileOffset_m past the multiples of kColourTile_m: an odd amount, so that no
+/// wall or box face of the scenes (at round coordinates) lies on an edge, where the colour would
+/// flip with the last bit of the depth.
 constexpr double kColourTile_m = 0.25;
+constexpr double kColourTileOffset_m = 0.0731;
 Rgb surfaceColour(const Eigen::Vector3d& p_W);
 /// What a colour camera registered to the depth camera sees from T_W_C: the surface colour at
 /// each pixel's exact depth; black where the ray meets nothing.
