@@ -95,7 +95,6 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
         return state_.last_stamp;
       },
       options_.frames.map_frame, options_.cloud_rate_hz, options_.mesh_rate_hz);
-  map_publisher_->setColour(settings.pipeline.fuse_colour && options_.colourUsable());
 
   // Start the reconfigure server from our values, not the cfg file's defaults.
   toReconfigureConfig(settings).__toServer__(pnh_);
@@ -187,7 +186,8 @@ void TrackerServer::onColour(const sensor_msgs::ImageConstPtr& image) {
     return;
   }
   std::lock_guard<std::mutex> lock(mailbox_mutex_);
-  ++colour_received_;
+  // From the first colour image on, ~cloud keeps its rgb field (a camera without colour: as before).
+  if (colour_received_++ == 0) map_publisher_->setColour(true);
   colour_cache_.push_back(image);
   if (colour_cache_.size() > kColourCache) colour_cache_.pop_front();
 }
@@ -541,7 +541,7 @@ void TrackerServer::reconfigure(sdf_tracker::SdfTrackerConfig& config, uint32_t 
     st::throwIfInvalid("reconfiguration", candidate.validate());
     state_.pipeline->updateConfig(candidate.pipeline);  // validates again; changes nothing when it throws
     updateColourSubscription(candidate.pipeline.fuse_colour);
-    map_publisher_->setColour(candidate.pipeline.fuse_colour && options_.colourUsable());
+    if (!candidate.pipeline.fuse_colour) map_publisher_->setColour(false);
     ROS_INFO("sdf_tracker: reconfigured");
   } catch (const std::invalid_argument& e) {
     ROS_ERROR("sdf_tracker: rejected reconfiguration: %s", e.what());

@@ -55,8 +55,9 @@ class MapPublisher {
                double cloud_rate_hz, double mesh_rate_hz);
   ~MapPublisher();
 
-  /// With Colour on, ~cloud always carries an rgb field (grey, kUnseenColour, before the map holds
-  /// colour): rviz's RGB8 colour transformer, once it met a cloud without, would not come back.
+  /// On (once colour images come), ~cloud always carries an rgb field (grey, kUnseenColour, before
+  /// the map holds colour): rviz's RGB8 colour transformer, once it met a cloud without, would not
+  /// come back.
   void setColour(bool colour_on) { colour_ = colour_on; }
 
  private:
