@@ -7,13 +7,15 @@ namespace sdf_tracker_ros {
 using diagnostic_msgs::DiagnosticStatus;
 
 NodeDiagnostics::NodeDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& hardware_id,
-                                 const std::string& odometry_transform)
+                                 const std::string& odometry_transform, const std::string& colour_topic)
     : updater_(nh, pnh, pnh.getNamespace()),  // the nodelet's own name, not its manager's
-      odometry_transform_(odometry_transform) {
+      odometry_transform_(odometry_transform),
+      colour_topic_(colour_topic) {
   updater_.setHardwareID(hardware_id);
   updater_.add("frames", this, &NodeDiagnostics::frames);
   updater_.add("tracking", this, &NodeDiagnostics::tracking);
   if (!odometry_transform_.empty()) updater_.add("odometry", this, &NodeDiagnostics::odometry);
+  if (!colour_topic_.empty()) updater_.add("colour", this, &NodeDiagnostics::colour);
   // The updater publishes at its own period (~diagnostic_period, 1 s); it has to be asked often.
   timer_ = nh.createTimer(ros::Duration(0.25), [this](const ros::TimerEvent&) { updater_.update(); });
 }
@@ -37,6 +39,35 @@ void NodeDiagnostics::odometryLookedUp(const std::string& problem) {
   } else {
     ++frames_without_odometry_;
     ++without_odometry_in_a_row_;
+  }
+}
+
+void NodeDiagnostics::colourReceived(const std::string& problem) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++colour_images_;
+  if (!problem.empty()) colour_problem_ = problem;
+}
+
+void NodeDiagnostics::frameColoured(bool coloured, const std::string& problem) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  ++(coloured ? frames_coloured_ : frames_uncoloured_);
+  if (coloured) colour_problem_.clear();
+  if (!problem.empty()) colour_problem_ = problem;
+}
+
+void NodeDiagnostics::colour(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  stat.add("topic", colour_topic_);
+  stat.add("colour images received", colour_images_);
+  stat.add("frames fused in colour", frames_coloured_);
+  stat.add("frames fused without colour", frames_uncoloured_);
+  if (!colour_problem_.empty()) {
+    stat.summary(DiagnosticStatus::WARN, colour_problem_);
+  } else if (colour_images_ == 0) {
+    stat.summaryf(DiagnosticStatus::OK, "no colour images on %s: the map is made without colour", colour_topic_.c_str());
+  } else {
+    stat.summaryf(DiagnosticStatus::OK, "%u of %u frames fused in colour", frames_coloured_,
+                  frames_coloured_ + frames_uncoloured_);
   }
 }
 

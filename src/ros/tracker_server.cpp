@@ -108,7 +108,8 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
   const std::string base =
       !f.base_frame.empty() ? f.base_frame : f.camera_frame.empty() ? "<image frame>" : f.camera_frame;
   diagnostics_ = std::make_unique<NodeDiagnostics>(nh_, pnh_, nh_.resolveName(depth_topic),
-                                                   f.odom_frame.empty() ? "" : f.odom_frame + " -> " + base);
+                                                   f.odom_frame.empty() ? "" : f.odom_frame + " -> " + base,
+                                                   settings.pipeline.fuse_colour ? colour_topic_ : "");
   frame_thread_ = std::thread(&TrackerServer::frameLoop, this);
   if (options_.intrinsics_from_parameters) {
     depth_only_sub_ = it_.subscribe(depth_topic, kSubscriberQueue,
@@ -176,6 +177,8 @@ void TrackerServer::updateColourSubscription(bool colour_on) {
 
 void TrackerServer::onColour(const sensor_msgs::ImageConstPtr& image) {
   if (!options_.colourUsable()) {
+    diagnostics_->colourReceived("colour images on " + colour_topic_ + " are not used: the depth is not registered to "
+                                 "them (~depth_registered or ~colour_registered)");
     // Colour from another viewpoint than the depth's would paint every surface with what lies
     // beside it: not used, and said once.
     ROS_WARN_ONCE("sdf_tracker: colour images on %s are not used: the depth on %s is not registered to them. Use a "
@@ -188,6 +191,7 @@ void TrackerServer::onColour(const sensor_msgs::ImageConstPtr& image) {
   std::lock_guard<std::mutex> lock(mailbox_mutex_);
   // From the first colour image on, ~cloud keeps its rgb field (a camera without colour: as before).
   if (colour_received_++ == 0) map_publisher_->setColour(true);
+  diagnostics_->colourReceived("");
   colour_cache_.push_back(image);
   if (colour_cache_.size() > kColourCache) colour_cache_.pop_front();
 }
@@ -208,6 +212,7 @@ std::optional<st::ColourImage> TrackerServer::colourAt(const ros::Time& stamp) {
   } catch (const std::invalid_argument& e) {
     ROS_WARN_THROTTLE(kThrottle_s, "sdf_tracker: colour image from %s: %s: the frame is fused without colour",
                       colour_topic_.c_str(), e.what());
+    colour_problem_ = std::string("colour image: ") + e.what();
     return std::nullopt;
   }
 }
@@ -390,7 +395,10 @@ void TrackerServer::process(const Frame& frame) {
     if (!report.colour_problem.empty()) {
       ROS_WARN_THROTTLE(kThrottle_s, "sdf_tracker: colour image from %s: %s: the frame is fused without colour",
                         colour_topic_.c_str(), report.colour_problem.c_str());
+      colour_problem_ = "colour image: " + report.colour_problem;
     }
+    if (report.fused) diagnostics_->frameColoured(report.coloured, colour_problem_);
+    colour_problem_.clear();
     T_W_C = state_.pipeline->pose();
     pose_known = state_.pipeline->poseKnown();
     status.consecutive_failures = static_cast<uint32_t>(state_.pipeline->consecutiveFailures());
@@ -540,7 +548,8 @@ void TrackerServer::reconfigure(sdf_tracker::SdfTrackerConfig& config, uint32_t 
     for (const auto& [name, value] : reconfigureValues(config)) st::setParameter(&candidate, name, value);
     st::throwIfInvalid("reconfiguration", candidate.validate());
     state_.pipeline->updateConfig(candidate.pipeline);  // validates again; changes nothing when it throws
-    updateColourSubscription(candidate.pipeline.fuse_colour);
+    // (The constructor's first call comes before the colour subscription's parts exist; it subscribes itself.)
+    if (diagnostics_) updateColourSubscription(candidate.pipeline.fuse_colour);
     if (!candidate.pipeline.fuse_colour) map_publisher_->setColour(false);
     ROS_INFO("sdf_tracker: reconfigured");
   } catch (const std::invalid_argument& e) {

@@ -76,6 +76,14 @@ class TumBagTest : public ::testing::Test {
   const std::string sequence_dir_ = ros::NodeHandle("~").param<std::string>("sequence", "");
   ros::NodeHandle nh_;
   sensor_msgs::PointCloud2ConstPtr last_cloud_;  ///< guarded by mutex_
+  diagnostic_msgs::DiagnosticStatus last_colour_status_;  ///< "sdf_tracker: colour"; guarded by mutex_
+  ros::Subscriber diagnostics_sub_ = nh_.subscribe<diagnostic_msgs::DiagnosticArray>(
+      "/diagnostics", 100, [this](const diagnostic_msgs::DiagnosticArrayConstPtr& msg) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        for (const auto& status : msg->status) {
+          if (status.name == "sdf_tracker: colour") last_colour_status_ = status;
+        }
+      });
   ros::Subscriber cloud_sub_ = nh_.subscribe<sensor_msgs::PointCloud2>(
       "sdf_tracker/cloud", 1, [this](const sensor_msgs::PointCloud2ConstPtr& cloud) {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -148,6 +156,10 @@ TEST_F(TumBagTest, PlaysAtRateOneWithOneParentPerFrameAndOfflineAccuracy) {
             << " points clear of the tiles' edges within " << kMaxLevelDifference << " levels of the scene's\n";
   EXPECT_GT(checked, 1000u);
   EXPECT_GT(agreeing, 0.95 * checked) << "the cloud does not carry the bag's colours";
+  std::lock_guard<std::mutex> diagnostics_lock(mutex_);
+  EXPECT_EQ(last_colour_status_.level, diagnostic_msgs::DiagnosticStatus::OK) << last_colour_status_.message;
+  EXPECT_NE(last_colour_status_.message.find("frames fused in colour"), std::string::npos)
+      << "\"" << last_colour_status_.message << "\"";
 }
 
 /// Every ~odom message, and the worst level each diagnostic status reached while frames came.
@@ -222,10 +234,14 @@ TEST_F(TumBagTest, WithWheelOdometryTheTrackerPublishesMapToOdomAndAnEkfReadyOdo
   EXPECT_TRUE(robot.bad_covariances.empty())
       << robot.bad_covariances.size() << " ~odom covariances are not finite and positive definite, the first at "
       << robot.bad_covariances.front();
-  for (const char* name : {"sdf_tracker: frames", "sdf_tracker: tracking"}) {
+  for (const char* name : {"sdf_tracker: frames", "sdf_tracker: tracking", "sdf_tracker: colour"}) {
     ASSERT_TRUE(robot.worst_level.count(name)) << "no diagnostics \"" << name << "\"";
     EXPECT_EQ(robot.worst_level[name], diagnostic_msgs::DiagnosticStatus::OK) << name << ": " << robot.worst_message[name];
   }
+  // The robot's bag has no colour: the map is made without, and that is no fault.
+  EXPECT_NE(robot.worst_message["sdf_tracker: colour"].find("no colour images on /camera/rgb/image_color"),
+            std::string::npos)
+      << robot.worst_message["sdf_tracker: colour"];
   st::test::expectOfflineAccuracy(sequence, watch.poses, "tum_bag.launch with wheel odometry",
                                   kMinProcessedFractionWalking, kMaxAteDifference_m, &wheels);
 }

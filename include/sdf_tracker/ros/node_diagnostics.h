@@ -22,6 +22,9 @@ namespace sdf_tracker_ros {
 ///   ERROR once tracking is lost (~status's `lost`).
 /// - "<node>: odometry", with ~odom_frame only: OK while each frame finds the robot's odometry in
 ///   tf, WARN naming the missing transform and tf's reason while frames come without it.
+/// - "<node>: colour", with Colour on at start: OK while frames are fused in colour, and for a
+///   camera that sends no colour images (the map is then made without); WARN when colour images
+///   come but cannot be used (the depth is not registered to them, a wrong encoding or size).
 class NodeDiagnostics {
  public:
   static constexpr double kStaleAfter_s = 3.0;
@@ -31,18 +34,24 @@ class NodeDiagnostics {
   /// `hardware_id`: the depth topic the node listens on. `odometry_transform`: the robot's
   /// odometry the node reads ("odom -> base_link"), or empty for none (no odometry task).
   NodeDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& hardware_id,
-                  const std::string& odometry_transform = "");
+                  const std::string& odometry_transform = "", const std::string& colour_topic = "");
 
   /// A frame's ~status, and the seconds from its image's stamp to its outputs. Frame thread.
   void frameProcessed(const sdf_tracker::TrackingStatus& status, double latency_s);
   /// A frame's odometry lookup: `problem` is why none was found (PoseBroadcaster::
   /// odometryProblem()), empty when it was. Frame thread.
   void odometryLookedUp(const std::string& problem);
+  /// A colour image came; `problem`: why it cannot be used at all (empty when it can). Any thread.
+  void colourReceived(const std::string& problem);
+  /// A frame was fused with colour or without; `problem`: why its colour image was not used
+  /// (empty: it was, or none came near it). Frame thread.
+  void frameColoured(bool coloured, const std::string& problem);
 
  private:
   void frames(diagnostic_updater::DiagnosticStatusWrapper& stat);
   void tracking(diagnostic_updater::DiagnosticStatusWrapper& stat);
   void odometry(diagnostic_updater::DiagnosticStatusWrapper& stat);
+  void colour(diagnostic_updater::DiagnosticStatusWrapper& stat);
   /// Forgets the processed frames older than the rate window.
   void trim(const ros::WallTime& now);
 
@@ -62,6 +71,9 @@ class NodeDiagnostics {
   std::string odometry_problem_;  ///< the last frame's
   uint32_t frames_with_odometry_ = 0, frames_without_odometry_ = 0, without_odometry_in_a_row_ = 0;
   bool odometry_looked_up_ = false;
+  std::string colour_topic_;
+  std::string colour_problem_;  ///< the last colour image's or frame's
+  uint32_t colour_images_ = 0, frames_coloured_ = 0, frames_uncoloured_ = 0;
 };
 
 }  // namespace sdf_tracker_ros

@@ -128,6 +128,8 @@ class TrackerServer {
   /// The camera's pose is not known (a loaded map, ~relocalise): it is searched for, not lost.
   bool searching_ = false;
   uint32_t frames_coloured_ = 0;
+  /// Why the frame being processed was not fused with its colour image (for the diagnostics).
+  std::string colour_problem_;
 
   std::unique_ptr<NodeDiagnostics> diagnostics_;
   std::unique_ptr<MapServices> services_;
