@@ -46,6 +46,11 @@ bool readIntrinsicsFile(const std::string& path, PinholeCamera* camera, double* 
   throw std::runtime_error(path + ": no intrinsics line");
 }
 
+/// A file a list names: relative to the sequence's folder, as TUM writes them, or absolute.
+std::string listedPath(const std::string& directory, const std::string& name) {
+  return !name.empty() && name[0] == '/' ? name : directory + "/" + name;
+}
+
 }  // namespace
 
 std::vector<TimedLine> readTimedList(const std::string& path) {
@@ -114,7 +119,7 @@ TumSequence TumSequence::open(const std::string& directory, const SequenceOption
       throw std::runtime_error(list_path + ": line " + std::to_string(line_number) + " has timestamp " +
                                std::to_string(frame.timestamp_s) + ", not after the previous frame's");
     }
-    frame.path = directory + "/" + relative;
+    frame.path = listedPath(directory, relative);
     sequence.frames_.push_back(frame);
   }
   if (sequence.frames_.empty()) throw std::runtime_error(list_path + ": lists no depth frames");
@@ -137,7 +142,7 @@ TumSequence TumSequence::open(const std::string& directory, const SequenceOption
         throw std::runtime_error(colour_list_path + ": the line of timestamp " + std::to_string(entry.timestamp_s) +
                                  " names no image");
       }
-      sequence.frames_[i].colour_path = directory + "/" + relative;
+      sequence.frames_[i].colour_path = listedPath(directory, relative);
       sequence.frames_[i].colour_timestamp_s = entry.timestamp_s;
     }
   }

@@ -399,6 +399,9 @@ TEST(TumColour, AFolderWithRgbTxtGivesEachDepthFrameItsColourImageAndNamesABadOn
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("8 bits a channel (got 16-bit greyscale)"), std::string::npos) << e.what();
   }
+  // A list may name its files by absolute paths too.
+  std::ofstream(dir + "/rgb.txt") << "10.2 " << dir << "/rgb/b.jpg\n";
+  EXPECT_EQ(TumSequence::open(dir).colourPath(2), dir + "/rgb/b.jpg");
   std::filesystem::remove(dir + "/rgb.txt");
   EXPECT_FALSE(TumSequence::open(dir).hasColourList());
   EXPECT_FALSE(TumSequence::open(dir).colour(0)) << "no rgb.txt: no colour, and no error";
