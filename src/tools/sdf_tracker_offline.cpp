@@ -466,7 +466,10 @@ int run(int argc, char** argv) {
   }
   if (read_colour) {
     summary << "\ncolour: " << coloured << " frames fused with colour";
-    if (colour_errors > 0) summary << ", " << colour_errors << " colour images could not be used (see above)";
+    if (colour_errors > 0) {
+      summary << ", " << colour_errors << (colour_errors == 1 ? " colour image" : " colour images")
+              << " could not be used (see above)";
+    }
   }
   summary << "\nplace memory: " << pipeline.places().keyframes().size() << " keyframes, "
           << pipeline.places().bytesPerKeyframe() << " bytes each";
