@@ -24,18 +24,22 @@ ColourAgreement compareMeshColours(const TriangleMesh& mesh, const TumSequence& 
 
   // The frames compared, and their times to find their poses by.
   std::vector<size_t> indices;
-  std::vector<io::StampedPose> frames;
+  std::vector<double> frame_times, pose_times;
   for (size_t i = 0; i < sequence.size(); i += static_cast<size_t>(frame_step)) {
     if (sequence.colourPath(i).empty()) continue;
     indices.push_back(i);
-    frames.push_back({sequence.timestamp(i), Eigen::Isometry3d::Identity()});
+    frame_times.push_back(sequence.timestamp(i));
   }
+  for (const io::StampedPose& pose : trajectory) pose_times.push_back(pose.timestamp_s);
+  constexpr double kMaxPoseGap_s = 0.02;  // as the benchmark associates poses
+  const std::vector<long> pose_of = associateByTime(frame_times, pose_times, kMaxPoseGap_s);
 
   ColourAgreement agreement;
   std::vector<double> distances;
   double channel_sum = 0.0;
   ColourImage colour;
-  for (const auto& [f, t] : associate(frames, trajectory)) {
+  for (size_t f = 0; f < indices.size(); ++f) {
+    if (pose_of[f] < 0) continue;
     const size_t index = indices[f];
     DepthImage depth = sequence.depth(index);
     const ColourImage raw = *sequence.colour(index);
@@ -45,7 +49,7 @@ ColourAgreement compareMeshColours(const TriangleMesh& mesh, const TumSequence& 
     } else {
       colour = raw;
     }
-    const Eigen::Isometry3f T_C_W = trajectory[t].T_W_C.inverse().cast<float>();
+    const Eigen::Isometry3f T_C_W = trajectory[static_cast<size_t>(pose_of[f])].T_W_C.inverse().cast<float>();
     ++agreement.frames;
     for (size_t v = 0; v < mesh.vertices_W.size(); ++v) {
       const Eigen::Vector3f p_C = T_C_W * mesh.vertices_W[v];

@@ -64,6 +64,7 @@ std::vector<TimedLine> readTimedList(const std::string& path) {
     if (line.empty() || line[0] == '#') continue;
     std::istringstream fields(line);
     TimedLine timed;
+    timed.line_number = number;
     if (!(fields >> timed.timestamp_s) || !std::isfinite(timed.timestamp_s)) {
       throw std::runtime_error(path + ": line " + std::to_string(number) + " does not start with a timestamp: \"" +
                                line + "\"");
@@ -72,6 +73,13 @@ std::vector<TimedLine> readTimedList(const std::string& path) {
     lines.push_back(std::move(timed));
   }
   return lines;
+}
+
+std::string TimedLine::firstWord() const {
+  std::istringstream words(rest);
+  std::string word;
+  words >> word;
+  return word;
 }
 
 std::vector<long> associateByTime(const std::vector<double>& a, const std::vector<double>& b, double max_difference_s) {
@@ -101,26 +109,23 @@ std::vector<long> associateByTime(const std::vector<double>& a, const std::vecto
 TumSequence TumSequence::open(const std::string& directory, const SequenceOptions& options) {
   TumSequence sequence;
   const std::string list_path = directory + "/depth.txt";
-  std::ifstream list(list_path);
-  if (!list) throw std::runtime_error(list_path + ": cannot open (is " + directory + " a TUM-layout sequence?)");
-  std::string line;
-  int line_number = 0;
-  while (std::getline(list, line)) {
-    ++line_number;
-    if (line.empty() || line[0] == '#') continue;
-    std::istringstream words(line);
+  if (!fileExists(list_path)) {
+    throw std::runtime_error(list_path + ": cannot open (is " + directory + " a TUM-layout sequence?)");
+  }
+  for (const TimedLine& entry : readTimedList(list_path)) {
+    const std::string relative = entry.firstWord();
+    if (relative.empty()) {
+      throw std::runtime_error(list_path + ": line " + std::to_string(entry.line_number) +
+                               " is not \"timestamp filename\": it names no file");
+    }
+    if (!sequence.frames_.empty() && entry.timestamp_s <= sequence.frames_.back().timestamp_s) {
+      throw std::runtime_error(list_path + ": line " + std::to_string(entry.line_number) + " has timestamp " +
+                               std::to_string(entry.timestamp_s) + ", not after the previous frame's");
+    }
     Frame frame;
-    std::string relative;
-    if (!(words >> frame.timestamp_s >> relative)) {
-      throw std::runtime_error(list_path + ": line " + std::to_string(line_number) +
-                               " is not \"timestamp filename\": " + line);
-    }
-    if (!sequence.frames_.empty() && frame.timestamp_s <= sequence.frames_.back().timestamp_s) {
-      throw std::runtime_error(list_path + ": line " + std::to_string(line_number) + " has timestamp " +
-                               std::to_string(frame.timestamp_s) + ", not after the previous frame's");
-    }
+    frame.timestamp_s = entry.timestamp_s;
     frame.path = listedPath(directory, relative);
-    sequence.frames_.push_back(frame);
+    sequence.frames_.push_back(std::move(frame));
   }
   if (sequence.frames_.empty()) throw std::runtime_error(list_path + ": lists no depth frames");
 
@@ -135,12 +140,9 @@ TumSequence TumSequence::open(const std::string& directory, const SequenceOption
     for (size_t i = 0; i < partner.size(); ++i) {
       if (partner[i] < 0) continue;
       const TimedLine& entry = colour[static_cast<size_t>(partner[i])];
-      std::istringstream words(entry.rest);
-      std::string relative;
-      words >> relative;
+      const std::string relative = entry.firstWord();
       if (relative.empty()) {
-        throw std::runtime_error(colour_list_path + ": the line of timestamp " + std::to_string(entry.timestamp_s) +
-                                 " names no image");
+        throw std::runtime_error(colour_list_path + ": line " + std::to_string(entry.line_number) + " names no image");
       }
       sequence.frames_[i].colour_path = listedPath(directory, relative);
       sequence.frames_[i].colour_timestamp_s = entry.timestamp_s;

@@ -541,9 +541,11 @@ const ColourImage* FrameColour::get() {
   return image_;
 }
 
-const ColourImage* SdfPipeline::prepareColour(const ColourImage* colour, const DepthImage& depth,
+const ColourImage* SdfPipeline::prepareColour(FrameColour* frame_colour, const DepthImage& depth,
                                               const PinholeCamera& camera, FrameReport* report) {
-  if (!colour || !config_.fuse_colour) return nullptr;
+  if (!config_.fuse_colour) return nullptr;
+  const ColourImage* colour = frame_colour->get();
+  if (!colour) return nullptr;
   if (std::string mismatch = colour->sizeMismatch(depth.width(), depth.height()); !mismatch.empty()) {
     report->colour_problem = std::move(mismatch);
     return nullptr;
@@ -710,8 +712,7 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     // Fusion must find every block of its view in memory: a swapped one would be made anew.
     restoreNear(T_W_C_, ideal_camera, furthest_m, &report);
     // Asked only now: a colour image that came while the frame was tracked is still used.
-    const ColourImage* colour_in =
-        config_.fuse_colour ? prepareColour(colour->get(), depth, camera, &report) : nullptr;
+    const ColourImage* colour_in = prepareColour(colour, depth, camera, &report);
     integrator_->integrate(filtered, ideal_camera, T_W_C_, map_.get(), colour_in);
     report.coloured = colour_in != nullptr;
     ++active_.frames_fused;

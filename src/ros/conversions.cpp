@@ -14,6 +14,24 @@ namespace sdf_tracker_ros {
 
 namespace enc = sensor_msgs::image_encodings;
 
+namespace {
+
+/// An image message of this size and encoding, rows packed, its data allocated.
+sensor_msgs::Image imageMsg(const std_msgs::Header& header, int width, int height, const std::string& encoding,
+                            uint32_t bytes_per_pixel) {
+  sensor_msgs::Image msg;
+  msg.header = header;
+  msg.width = static_cast<uint32_t>(width);
+  msg.height = static_cast<uint32_t>(height);
+  msg.encoding = encoding;
+  msg.is_bigendian = 0;
+  msg.step = msg.width * bytes_per_pixel;
+  msg.data.resize(static_cast<size_t>(msg.step) * msg.height);
+  return msg;
+}
+
+}  // namespace
+
 sdf_tracker::DepthImage toDepthImage(const sensor_msgs::Image& msg) {
   const bool millimetres = msg.encoding == enc::TYPE_16UC1 || msg.encoding == enc::MONO16;
   const bool metres = msg.encoding == enc::TYPE_32FC1;
@@ -46,14 +64,7 @@ sdf_tracker::DepthImage toDepthImage(const sensor_msgs::Image& msg) {
 }
 
 sensor_msgs::Image toImageMsg(const sdf_tracker::DepthImage& depth, const std_msgs::Header& header) {
-  sensor_msgs::Image msg;
-  msg.header = header;
-  msg.width = static_cast<uint32_t>(depth.width());
-  msg.height = static_cast<uint32_t>(depth.height());
-  msg.encoding = enc::TYPE_32FC1;
-  msg.is_bigendian = 0;
-  msg.step = msg.width * 4;
-  msg.data.resize(static_cast<size_t>(msg.step) * msg.height);
+  sensor_msgs::Image msg = imageMsg(header, depth.width(), depth.height(), enc::TYPE_32FC1, 4);
   const float nan = std::numeric_limits<float>::quiet_NaN();
   for (int v = 0; v < depth.height(); ++v) {
     for (int u = 0; u < depth.width(); ++u) {
@@ -102,14 +113,8 @@ sdf_tracker::ColourImage toColourImage(const sensor_msgs::Image& msg) {
 }
 
 sensor_msgs::Image toImageMsg(const sdf_tracker::ColourImage& colour, const std_msgs::Header& header) {
-  sensor_msgs::Image msg;
-  msg.header = header;
-  msg.width = static_cast<uint32_t>(colour.width());
-  msg.height = static_cast<uint32_t>(colour.height());
-  msg.encoding = enc::RGB8;
-  msg.is_bigendian = 0;
-  msg.step = msg.width * 3;
-  msg.data.assign(colour.data(), colour.data() + static_cast<size_t>(msg.step) * msg.height);
+  sensor_msgs::Image msg = imageMsg(header, colour.width(), colour.height(), enc::RGB8, 3);
+  std::copy(colour.data(), colour.data() + msg.data.size(), msg.data.begin());
   return msg;
 }
 

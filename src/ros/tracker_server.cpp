@@ -96,12 +96,6 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
       },
       options_.frames.map_frame, options_.cloud_rate_hz, options_.mesh_rate_hz);
 
-  // Start the reconfigure server from our values, not the cfg file's defaults.
-  toReconfigureConfig(settings).__toServer__(pnh_);
-  reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<sdf_tracker::SdfTrackerConfig>>(pnh_);
-  reconfigure_server_->setCallback(
-      [this](sdf_tracker::SdfTrackerConfig& config, uint32_t level) { reconfigure(config, level); });
-
   const std::string depth_topic =
       options_.camera_name + (options_.depth_registered ? "/depth_registered/image" : "/depth/image");
   const auto& f = options_.frames;
@@ -110,6 +104,13 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
   diagnostics_ = std::make_unique<NodeDiagnostics>(nh_, pnh_, nh_.resolveName(depth_topic),
                                                    f.odom_frame.empty() ? "" : f.odom_frame + " -> " + base,
                                                    settings.pipeline.fuse_colour ? colour_topic_ : "");
+
+  // Start the reconfigure server from our values, not the cfg file's defaults. Its first call
+  // comes now, and may subscribe to colour: everything a colour image reaches exists by then.
+  toReconfigureConfig(settings).__toServer__(pnh_);
+  reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<sdf_tracker::SdfTrackerConfig>>(pnh_);
+  reconfigure_server_->setCallback(
+      [this](sdf_tracker::SdfTrackerConfig& config, uint32_t level) { reconfigure(config, level); });
   frame_thread_ = std::thread(&TrackerServer::frameLoop, this);
   if (options_.intrinsics_from_parameters) {
     depth_only_sub_ = it_.subscribe(depth_topic, kSubscriberQueue,
@@ -148,7 +149,6 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
         pending_pose_request_ = *request;
       });
   watchdog_timer_ = nh_.createTimer(ros::Duration(2.0), &TrackerServer::checkInputs, this);
-  updateColourSubscription(settings.pipeline.fuse_colour);
 
   const auto& v = settings.pipeline.volume;
   const std::string tree = f.odom_frame.empty()
@@ -548,8 +548,7 @@ void TrackerServer::reconfigure(sdf_tracker::SdfTrackerConfig& config, uint32_t 
     for (const auto& [name, value] : reconfigureValues(config)) st::setParameter(&candidate, name, value);
     st::throwIfInvalid("reconfiguration", candidate.validate());
     state_.pipeline->updateConfig(candidate.pipeline);  // validates again; changes nothing when it throws
-    // (The constructor's first call comes before the colour subscription's parts exist; it subscribes itself.)
-    if (diagnostics_) updateColourSubscription(candidate.pipeline.fuse_colour);
+    updateColourSubscription(candidate.pipeline.fuse_colour);
     if (!candidate.pipeline.fuse_colour) map_publisher_->setColour(false);
     ROS_INFO("sdf_tracker: reconfigured");
   } catch (const std::invalid_argument& e) {

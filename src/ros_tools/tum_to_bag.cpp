@@ -203,7 +203,7 @@ int run(int argc, char** argv) {
         header.seq = static_cast<uint32_t>(colour_index);
         header.stamp = stamp(colour[colour_index].timestamp_s);
         header.frame_id = "/openni_rgb_optical_frame";
-        const std::string path = args.positional(0) + "/" + colour[colour_index].rest;
+        const std::string path = args.positional(0) + "/" + colour[colour_index].firstWord();
         const sensor_msgs::Image image = sdf_tracker_ros::toImageMsg(st::io::readColourImage(path), header);
         const st::PinholeCamera camera = recordedCamera(static_cast<int>(image.width), static_cast<int>(image.height));
         bag.write("/camera/rgb/image_color", header.stamp, image);

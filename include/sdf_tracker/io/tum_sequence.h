@@ -26,6 +26,9 @@ struct SequenceOptions {
 struct TimedLine {
   double timestamp_s;
   std::string rest;
+  int line_number;  ///< in its file, from 1
+  /// The first word after the timestamp: the file a list of images names ("" when none).
+  std::string firstWord() const;
 };
 /// The lines of a TUM list after '#' comments, in file order; throws std::runtime_error naming
 /// the file and line for one that does not start with a finite timestamp, or when the file

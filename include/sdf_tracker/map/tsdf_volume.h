@@ -80,11 +80,8 @@ class TsdfVolume : public TsdfMap {
   /// A voxel's colour (none seen when the grid holds no colour).
   VoxelColour colour(size_t index) const { return colours_.empty() ? VoxelColour{} : colours_[index]; }
   VoxelColour colour(int i, int j, int k) const { return colour(index(i, j, k)); }
-  /// Sets a voxel's colour (making room for colour first).
-  void setColour(size_t index, const VoxelColour& colour) {
-    enableColour();
-    colours_[index] = colour;
-  }
+  /// Sets a voxel's colour; the grid must hold colour (enableColour()).
+  void setColour(size_t index, const VoxelColour& colour) { colours_[index] = colour; }
   void setColour(int i, int j, int k, const VoxelColour& c) { setColour(index(i, j, k), c); }
 
   /// Copies the z-slabs [k_begin, k_end) of `source` (their colours too), which must have this volume's config

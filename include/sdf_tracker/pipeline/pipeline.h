@@ -313,10 +313,10 @@ class SdfPipeline {
   FrameReport process(const DepthImage& depth, const PinholeCamera& camera, double timestamp_s,
                       const std::optional<Eigen::Isometry3d>& given_T_W_C,
                       const std::optional<Eigen::Isometry3d>& T_odom_C, FrameColour* colour);
-  /// The colour image as the integrator takes it (undistorted as the depth, in colour_buffer_),
-  /// or nullptr when there is none, colour is off, or it does not fit the depth (said in the
-  /// report).
-  const ColourImage* prepareColour(const ColourImage* colour, const DepthImage& depth, const PinholeCamera& camera,
+  /// The frame's colour image as the integrator takes it (undistorted as the depth, in
+  /// colour_buffer_), or nullptr when colour is off (`colour` is then not asked), there is none,
+  /// or it does not fit the depth (said in the report).
+  const ColourImage* prepareColour(FrameColour* colour, const DepthImage& depth, const PinholeCamera& camera,
                                    FrameReport* report);
   /// The image as the tracker and integrator take it: undistorted, depths out of range removed.
   DepthImage prepareDepth(const DepthImage& depth, const PinholeCamera& camera);
