@@ -16,9 +16,21 @@ double rosStampOffset(const TumSequence& sequence) {
   return start_s < 1.0 ? 1.0 : 0.0;
 }
 
-std::string calibrationFileFor(const std::string& recording) {
-  if (std::filesystem::is_directory(recording)) return recording + "/depth_camera_info.yaml";
-  return recording + ".yaml";
+std::string calibrationFileFor(const std::string& recording, RecordedCamera camera) {
+  const bool depth = camera == RecordedCamera::kDepth;
+  if (std::filesystem::is_directory(recording)) return recording + (depth ? "/depth" : "/rgb") + "_camera_info.yaml";
+  return recording + (depth ? ".yaml" : ".rgb.yaml");
+}
+
+std::vector<RecordedImage> recordingOrder(const TumSequence& sequence, bool with_colour) {
+  std::vector<RecordedImage> images;
+  for (size_t i = 0; i < sequence.size(); ++i) {
+    images.push_back({sequence.timestamp(i), i, false});
+    if (with_colour && !sequence.colourPath(i).empty()) images.push_back({sequence.colourTimestamp(i), i, true});
+  }
+  std::stable_sort(images.begin(), images.end(),
+                   [](const RecordedImage& a, const RecordedImage& b) { return a.timestamp_s < b.timestamp_s; });
+  return images;
 }
 
 void writeCalibrationFile(const std::string& path, const PinholeCamera& camera, const std::string& camera_name) {

@@ -2,8 +2,9 @@
 // in Debian), publishing what freenect_launch publishes (see DepthCameraPublisher).
 //
 // Parameters: ~device_id ("#1", "#2", ... or a serial; empty: the first Kinect),
-// ~depth_registration (depth in the colour camera's frame, needs a real device), and those of
-// DepthCameraPublisher. Streams only while someone subscribes.
+// ~depth_registration (depth in the colour camera's frame), and those of DepthCameraPublisher.
+// Streams depth only while someone subscribes to it, colour (RGB, 640x480) only while someone
+// subscribes to colour.
 //
 // Depth: the device sends 11-bit disparities; they become millimetres through libfreenect's
 // depth model with the device's own zero-plane calibration when the library provides it, else
@@ -11,9 +12,11 @@
 // registered millimetre mode is used instead.
 //
 // Replay: under libfreenect's fakenect (FAKENECT_PATH set, and its library first on
-// LD_LIBRARY_PATH, as the `fakenect` wrapper does), frames carry the recording's own stamps and
-// the node ends when the recording does; a frame whose file is incomplete is skipped, said by
-// name. A live device that stops is re-opened until it is back.
+// LD_LIBRARY_PATH, as the `fakenect` wrapper does), frames and colour images carry the
+// recording's own stamps and the node ends when the recording does; a file that is incomplete is
+// skipped, said by name. fakenect plays the depth as it was recorded: ~depth_registration then
+// states that it was recorded registered to the colour (tum_to_fakenect's recordings are). A live
+// device that stops is re-opened until it is back.
 
 #include <dlfcn.h>
 
@@ -36,6 +39,9 @@ namespace {
 
 namespace dev = sdf_tracker::devices;
 constexpr double kReopenInterval_s = sdf_tracker_ros::DepthCameraPublisher::kReopenInterval_s;
+/// The Kinect v1 colour camera's focal length at 640x480 in freenect_camera's nominal calibration,
+/// for when no calibration states it (libfreenect does not know it).
+constexpr double kNominalColourFocal_px = 525.0;
 
 /// libfreenect's device calibration, when the library in use has it: fakenect's stand-in
 /// library does not, so the function is looked up at run time rather than linked.
@@ -66,6 +72,17 @@ std::optional<freenect_frame_mode> depthMode(freenect_depth_format format) {
   return std::nullopt;
 }
 
+/// 640x480 RGB, if the library offers it (never freenect_find_video_mode, for the same reason).
+std::optional<freenect_frame_mode> colourMode() {
+  for (int i = 0; i < freenect_get_video_mode_count(); ++i) {
+    const freenect_frame_mode mode = freenect_get_video_mode(i);
+    if (mode.is_valid && mode.video_format == FREENECT_VIDEO_RGB && mode.resolution == FREENECT_RESOLUTION_MEDIUM) {
+      return mode;
+    }
+  }
+  return std::nullopt;
+}
+
 class KinectDriver {
  public:
   KinectDriver() : camera_nh_(sdf_tracker_ros::DepthCameraPublisher::cameraNamespace()), pnh_("~"), publisher_(camera_nh_, pnh_) {
@@ -81,19 +98,22 @@ class KinectDriver {
     freenect_select_subdevices(context_, FREENECT_DEVICE_CAMERA);
     if (!replay_path_.empty()) {
       try {
-        recording_frames_ = dev::readFakenectDepthFrames(replay_path_);
+        recording_ = dev::readFakenectFrames(replay_path_);
       } catch (const std::exception& e) {
         ROS_FATAL("kinect_depth_publisher: FAKENECT_PATH=%s: %s", replay_path_.c_str(), e.what());
         return 1;
       }
-      ROS_INFO("kinect_depth_publisher: replaying the fakenect recording %s (%zu depth frames)",
-               std::filesystem::absolute(replay_path_).c_str(), recording_frames_.size());
-      const auto incomplete = std::count_if(recording_frames_.begin(), recording_frames_.end(),
-                                            [](const dev::FakenectDepthFrame& f) { return !f.problem.empty(); });
-      if (incomplete > 0) {
-        ROS_WARN("kinect_depth_publisher: %ld of the recording's depth frames are incomplete and will be skipped "
-                 "when fakenect plays them",
-                 static_cast<long>(incomplete));
+      ROS_INFO("kinect_depth_publisher: replaying the fakenect recording %s (%zu depth frames, %zu colour images)%s",
+               std::filesystem::absolute(replay_path_).c_str(), recording_.depth.size(), recording_.colour.size(),
+               publisher_.registered() ? ", its depth registered to the colour (~depth_registration)" : "");
+      auto incomplete = [](const std::vector<dev::FakenectFrame>& frames) {
+        return static_cast<long>(std::count_if(frames.begin(), frames.end(),
+                                               [](const dev::FakenectFrame& f) { return !f.problem.empty(); }));
+      };
+      if (incomplete(recording_.depth) + incomplete(recording_.colour) > 0) {
+        ROS_WARN("kinect_depth_publisher: %ld of the recording's depth frames and %ld of its colour images are "
+                 "incomplete and will be skipped when fakenect plays them",
+                 incomplete(recording_.depth), incomplete(recording_.colour));
       }
       if (!publisher_.useRecordingCalibration(replay_path_)) {
         freenect_shutdown(context_);
@@ -135,12 +155,13 @@ class KinectDriver {
                 device_id_.empty() ? "#1" : device_id_.c_str(), status);
       return false;
     }
-    const freenect_depth_format format = publisher_.registered() ? FREENECT_DEPTH_REGISTERED : FREENECT_DEPTH_11BIT;
+    // A recording's depth is played as recorded; a live device registers it when asked to.
+    const bool register_depth = publisher_.registered() && replay_path_.empty();
+    const freenect_depth_format format = register_depth ? FREENECT_DEPTH_REGISTERED : FREENECT_DEPTH_11BIT;
     const std::optional<freenect_frame_mode> mode = depthMode(format);
     if (!mode) {
-      ROS_FATAL("kinect_depth_publisher: this libfreenect offers no %s depth mode%s",
-                publisher_.registered() ? "registered" : "11-bit",
-                replay_path_.empty() ? "" : " (fakenect replays unregistered depth: set ~depth_registration false)");
+      ROS_FATAL("kinect_depth_publisher: this libfreenect offers no %s depth mode",
+                register_depth ? "registered" : "11-bit");
       return false;
     }
     freenect_set_depth_mode(device_, *mode);
@@ -153,8 +174,18 @@ class KinectDriver {
     nominal_.fx = nominal_.fy = zero_plane.focalLength640_px() * mode->width / 640.0;
     nominal_.cx = (mode->width - 1) / 2.0;
     nominal_.cy = (mode->height - 1) / 2.0;
+    nominal_colour_ = nominal_;
+    nominal_colour_.fx = nominal_colour_.fy = kNominalColourFocal_px * mode->width / 640.0;
+    if (publisher_.registered()) nominal_ = nominal_colour_;  // the depth is seen from the colour camera
+    colour_mode_ = colourMode();
+    if (colour_mode_) {
+      freenect_set_video_mode(device_, *colour_mode_);
+    } else {
+      ROS_WARN("kinect_depth_publisher: this libfreenect offers no 640x480 RGB mode: depth only");
+    }
     freenect_set_user(device_, this);
     freenect_set_depth_callback(device_, &KinectDriver::onDepth);
+    freenect_set_video_callback(device_, &KinectDriver::onColour);
     ROS_INFO("kinect_depth_publisher: Kinect open, %dx%d %s depth, %s calibration", mode->width, mode->height,
              publisher_.registered() ? "registered" : "11-bit",
              device_zero_plane ? "the device's" : "typical zero-plane");
@@ -164,7 +195,8 @@ class KinectDriver {
   void close() {
     if (device_ == nullptr) return;
     if (streaming_) freenect_stop_depth(device_);
-    streaming_ = false;
+    if (streaming_colour_) freenect_stop_video(device_);
+    streaming_ = streaming_colour_ = false;
     freenect_close_device(device_);
     device_ = nullptr;
   }
@@ -178,6 +210,14 @@ class KinectDriver {
         (wanted ? freenect_start_depth : freenect_stop_depth)(device_);
         streaming_ = wanted;
         ROS_INFO("kinect_depth_publisher: %s streaming", wanted ? "subscribed: start" : "no subscriber: stop");
+      }
+      // fakenect passes over a colour image while colour is stopped: a recording plays colour with
+      // its depth, so that every image it hands on is the one INDEX.txt lists next.
+      const bool colour_wanted =
+          colour_mode_.has_value() && (replay_path_.empty() ? publisher_.hasColourSubscribers() : streaming_);
+      if (colour_wanted != streaming_colour_) {
+        (colour_wanted ? freenect_start_video : freenect_stop_video)(device_);
+        streaming_colour_ = colour_wanted;
       }
       // A recording advances with every call: only while streaming, so no frame is skipped.
       if (!replay_path_.empty() && !streaming_) {
@@ -205,21 +245,40 @@ class KinectDriver {
     static_cast<KinectDriver*>(freenect_get_user(device))->publish(static_cast<const uint16_t*>(data));
   }
 
+  static void onColour(freenect_device* device, void* rgb, uint32_t /*device_timestamp*/) {
+    static_cast<KinectDriver*>(freenect_get_user(device))->publishColour(static_cast<const uint8_t*>(rgb));
+  }
+
+  /// The recording's next file of `frames`, if it is whole (fakenect hands on whatever the file
+  /// held: reading a whole image from a short one would overrun); its stamp goes to `stamp`.
+  bool nextRecorded(const std::vector<dev::FakenectFrame>& frames, size_t* next, const char* what, ros::Time* stamp) {
+    if (*next >= frames.size()) {
+      ROS_ERROR_ONCE("kinect_depth_publisher: the recording plays more %s than its INDEX.txt lists", what);
+      return false;
+    }
+    const dev::FakenectFrame& frame = frames[(*next)++];
+    if (!frame.problem.empty()) {
+      ROS_ERROR("kinect_depth_publisher: skipped the recording's %s %s: it %s", what, frame.file.c_str(),
+                frame.problem.c_str());
+      return false;
+    }
+    *stamp = ros::Time(frame.time_s);
+    return true;
+  }
+
+  void publishColour(const uint8_t* rgb) {
+    ros::Time stamp = ros::Time::now();
+    if (!replay_path_.empty() && !nextRecorded(recording_.colour, &colour_frames_, "colour images", &stamp)) return;
+    if (publisher_.hasColourSubscribers()) {
+      publisher_.publishColour(rgb, colour_mode_->width, colour_mode_->height, colour_mode_->width * 3, stamp,
+                               nominal_colour_);
+    }
+  }
+
   void publish(const uint16_t* data) {
     ros::Time stamp = ros::Time::now();
     if (!replay_path_.empty()) {
-      if (frames_ >= recording_frames_.size()) {
-        ROS_ERROR_ONCE("kinect_depth_publisher: the recording plays more frames than its INDEX.txt lists");
-        return;
-      }
-      const dev::FakenectDepthFrame& frame = recording_frames_[frames_++];
-      // fakenect hands on whatever the file held: reading a whole frame from it would overrun.
-      if (!frame.problem.empty()) {
-        ROS_ERROR("kinect_depth_publisher: skipped the recording's depth frame %s: it %s", frame.file.c_str(),
-                  frame.problem.c_str());
-        return;
-      }
-      stamp = ros::Time(frame.time_s);
+      if (!nextRecorded(recording_.depth, &frames_, "depth frames", &stamp)) return;
     } else {
       ++frames_;
     }
@@ -235,15 +294,16 @@ class KinectDriver {
   ros::NodeHandle camera_nh_, pnh_;
   sdf_tracker_ros::DepthCameraPublisher publisher_;
   std::string device_id_, replay_path_;
-  std::vector<dev::FakenectDepthFrame> recording_frames_;
+  dev::FakenectFrames recording_;
   freenect_context* context_ = nullptr;
   freenect_device* device_ = nullptr;
   freenect_frame_mode mode_{};
+  std::optional<freenect_frame_mode> colour_mode_;
   dev::KinectDisparityTable disparity_;
-  sdf_tracker::PinholeCamera nominal_;
+  sdf_tracker::PinholeCamera nominal_, nominal_colour_;
   std::vector<uint16_t> depth_mm_;
-  size_t frames_ = 0;
-  bool streaming_ = false;
+  size_t frames_ = 0, colour_frames_ = 0;
+  bool streaming_ = false, streaming_colour_ = false;
 };
 
 }  // namespace

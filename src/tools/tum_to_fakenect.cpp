@@ -1,7 +1,7 @@
 // tum_to_fakenect: turns a TUM-layout depth sequence into a libfreenect "fakenect" recording, so a
-// Kinect v1 can be replayed through libfreenect itself:
-//   rosrun sdf_tracker tum_to_fakenect SEQUENCE_DIR DUMP_DIR [--frames N]
-//   roslaunch sdf_tracker kinect.launch fakenect:=DUMP_DIR
+// Kinect v1 can be replayed through libfreenect itself, colour and all:
+//   rosrun sdf_tracker tum_to_fakenect SEQUENCE_DIR DUMP_DIR [--frames N] [--no-colour]
+//   roslaunch sdf_tracker kinect.launch fakenect:=DUMP_DIR depth_registration:=true
 
 #include <cmath>
 #include <iostream>
@@ -16,20 +16,24 @@ namespace {
 namespace st = sdf_tracker;
 namespace dev = sdf_tracker::devices;
 
-const char* kUsage = R"(usage: tum_to_fakenect SEQUENCE_DIR DUMP_DIR [--frames N]
+const char* kUsage = R"(usage: tum_to_fakenect SEQUENCE_DIR DUMP_DIR [--frames N] [--no-colour]
 
 Writes a fakenect recording (libfreenect's replay format: INDEX.txt and one PGM per frame) of a
 640x480 TUM-layout depth sequence: each depth becomes the raw 11-bit disparity a Kinect v1 sends
 for it (libfreenect's depth model with typical Kinect v1 zero-plane values), at the sequence's stamps
-(shifted by 1 s if they start below 1 s, as ROS time 0 means "no time"). The sequence's
-intrinsics go to DUMP_DIR/depth_camera_info.yaml, where kinect.launch finds them.
-DUMP_DIR must not exist; it appears only when the recording is complete.
+(shifted by 1 s if they start below 1 s, as ROS time 0 means "no time"), and, when the folder has
+rgb.txt, the colour images paired with the depth frames, at their own stamps. The sequence's
+intrinsics go to DUMP_DIR/depth_camera_info.yaml (and rgb_camera_info.yaml), where kinect.launch
+finds them. A TUM sequence's depth is registered to its colour: play it with
+depth_registration:=true for a coloured map. DUMP_DIR must not exist; it appears only when the
+recording is complete.
 
-  --frames N   only the first N frames
+  --frames N    only the first N frames
+  --no-colour   depth frames only
 )";
 
 int run(int argc, char** argv) {
-  const st::tools::CommandLine args(argc, argv, {"frames"}, {"help"}, {"SEQUENCE_DIR", "DUMP_DIR"});
+  const st::tools::CommandLine args(argc, argv, {"frames"}, {"help", "no-colour"}, {"SEQUENCE_DIR", "DUMP_DIR"});
   if (args.has("help")) {
     std::cout << kUsage;
     return 0;
@@ -43,10 +47,16 @@ int run(int argc, char** argv) {
   const double offset_s = dev::rosStampOffset(sequence);
   const dev::KinectDisparityTable table;
   dev::FakenectDumpWriter writer(args.positional(1));
-  size_t out_of_range = 0, measured = 0;
+  const bool with_colour = sequence.hasColourList() && !args.has("no-colour");
+  size_t out_of_range = 0, measured = 0, colour_frames = 0;
   std::vector<uint16_t> disparities;
-  for (size_t i = 0; i < sequence.size(); ++i) {
-    disparities = sequence.depth(i).toRaw16(1000.0);  // millimetres, then what a Kinect sends for them
+  for (const dev::RecordedImage& image : dev::recordingOrder(sequence, with_colour)) {
+    if (image.colour) {
+      writer.addColour(image.timestamp_s + offset_s, *sequence.colour(image.frame));
+      ++colour_frames;
+      continue;
+    }
+    disparities = sequence.depth(image.frame).toRaw16(1000.0);  // millimetres, then what a Kinect sends for them
     for (uint16_t& value : disparities) {
       if (value == 0) {
         value = dev::kKinectNoDisparity;
@@ -56,11 +66,17 @@ int run(int argc, char** argv) {
       value = table.fromMillimetres(value);
       if (value == dev::kKinectNoDisparity) ++out_of_range;
     }
-    writer.addDepth(sequence.timestamp(i) + offset_s, disparities);
+    writer.addDepth(image.timestamp_s + offset_s, disparities);
   }
   dev::writeCalibrationFile(dev::calibrationFileFor(writer.stagingFolder()), camera, "depth");
+  if (with_colour) {
+    dev::writeCalibrationFile(dev::calibrationFileFor(writer.stagingFolder(), dev::RecordedCamera::kColour), camera,
+                              "rgb");
+  }
   writer.finish();
-  std::cout << "wrote " << sequence.size() << " depth frames to " << args.positional(1);
+  std::cout << "wrote " << sequence.size() << " depth frames";
+  if (with_colour) std::cout << " and " << colour_frames << " colour images";
+  std::cout << " to " << args.positional(1);
   if (offset_s != 0.0) std::cout << " (stamps shifted by " << offset_s << " s)";
   std::cout << "\n";
   if (out_of_range > 0) {

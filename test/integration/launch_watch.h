@@ -1,6 +1,6 @@
 #pragma once
 // What the rostests that play a launch file watch: every parent a tf frame gets, the tracker's
-// poses, and the offline pipeline on the same sequence to compare them with.
+// poses, its latest diagnostics, and the offline pipeline on the same sequence to compare them with.
 
 #include <gtest/gtest.h>
 
@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <ros/ros.h>
 #include <tf2_msgs/TFMessage.h>
@@ -29,15 +30,16 @@
 
 namespace sdf_tracker::test {
 
-/// Subscribes to /tf, /tf_static, sdf_tracker/pose and sdf_tracker/status for its lifetime. Lock
-/// `mutex` to read.
+/// Subscribes to /tf, /tf_static, sdf_tracker/pose, sdf_tracker/status and /diagnostics for its
+/// lifetime. Lock `mutex` to read.
 class LaunchWatch {
  public:
   explicit LaunchWatch(ros::NodeHandle& nh)
       : tf_sub_(nh.subscribe("/tf", 1000, &LaunchWatch::onTf, this)),
         static_sub_(nh.subscribe("/tf_static", 100, &LaunchWatch::onTf, this)),
         pose_sub_(nh.subscribe("sdf_tracker/pose", 1000, &LaunchWatch::onPose, this)),
-        status_sub_(nh.subscribe("sdf_tracker/status", 1000, &LaunchWatch::onStatus, this)) {}
+        status_sub_(nh.subscribe("sdf_tracker/status", 1000, &LaunchWatch::onStatus, this)),
+        diagnostics_sub_(nh.subscribe("/diagnostics", 100, &LaunchWatch::onDiagnostics, this)) {}
 
   /// Every frame seen on /tf or /tf_static has exactly one parent (call with `mutex` held).
   void expectOneParentPerFrame() const {
@@ -62,6 +64,8 @@ class LaunchWatch {
   /// before this subscriber's connection stood, and their statuses never reached it.
   uint32_t first_frames_received = 0;
   uint32_t first_frames_dropped = 0;
+  /// The latest status of each name on /diagnostics ("sdf_tracker: colour", ...).
+  std::map<std::string, diagnostic_msgs::DiagnosticStatus> diagnostics;
 
   /// Frames the node received, and dropped, from the first status seen on (call with `mutex` held).
   uint32_t framesReceivedWhileWatched() const { return statuses > 0 ? frames_received - first_frames_received + 1 : 0; }
@@ -91,8 +95,21 @@ class LaunchWatch {
     frames_dropped = std::max(frames_dropped, msg.frames_dropped);
   }
 
-  ros::Subscriber tf_sub_, static_sub_, pose_sub_, status_sub_;
+  void onDiagnostics(const diagnostic_msgs::DiagnosticArray& msg) {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (const auto& status : msg.status) diagnostics[status.name] = status;
+  }
+
+  ros::Subscriber tf_sub_, static_sub_, pose_sub_, status_sub_, diagnostics_sub_;
 };
+
+/// The node coloured its map from the colour images it was given: "sdf_tracker: colour" is OK and
+/// says frames were fused in colour (call with the watch's `mutex` held).
+inline void expectFusedInColour(LaunchWatch& watch) {
+  const diagnostic_msgs::DiagnosticStatus& colour = watch.diagnostics["sdf_tracker: colour"];
+  EXPECT_EQ(colour.level, diagnostic_msgs::DiagnosticStatus::OK) << colour.message;
+  EXPECT_NE(colour.message.find("frames fused in colour"), std::string::npos) << "\"" << colour.message << "\"";
+}
 
 /// The node's poses against the offline pipeline's (default preset) on the same sequence, with the
 /// same `odometry` as the prediction when it has one: prints both ATEs after `label` and checks the

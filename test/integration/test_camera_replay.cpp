@@ -2,14 +2,19 @@
 // camera library's own playback (libfreenect's fakenect, OpenNI 2's OniFile): the frames carry
 // the sequence's stamps, every frame reaches the node, which processes it or counts it as dropped,
 // the estimate is as accurate as the offline pipeline's on the same frames, and no frame of /tf
-// has two parents.
+// has two parents. The recording carries colour and is played with depth_registration:=true: the
+// driver publishes the colour images at their own stamps and the node colours its map with them.
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <set>
+#include <vector>
 #include <iostream>
 
 #include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
 
 #include "launch_watch.h"
 
@@ -39,8 +44,16 @@ TEST(CameraReplay, TracksTheRecordingAsTheOfflineRunnerDoes) {
   ASSERT_FALSE(sequence_dir.empty()) << "~sequence: the folder the recording was made from";
   const st::TumSequence sequence = st::TumSequence::open(sequence_dir);
 
+  ASSERT_TRUE(sequence.hasColourList()) << sequence_dir << " was made without colour (sdf_tracker_synth --colour)";
+
   ros::NodeHandle nh;
   st::test::LaunchWatch watch(nh);
+  std::vector<double> colour_stamps_s;  // guarded by watch.mutex
+  const ros::Subscriber colour_sub = nh.subscribe<sensor_msgs::CameraInfo>(
+      "camera/rgb/camera_info", 1000, [&](const sensor_msgs::CameraInfoConstPtr& info) {
+        std::lock_guard<std::mutex> lock(watch.mutex);
+        colour_stamps_s.push_back(info->header.stamp.toSec());
+      });
   ros::AsyncSpinner spinner(1);
   spinner.start();
 
@@ -62,6 +75,7 @@ TEST(CameraReplay, TracksTheRecordingAsTheOfflineRunnerDoes) {
   watch.expectOneParentPerFrame();
   EXPECT_EQ(watch.parents["camera_link"], std::set<std::string>{"map"}) << "the tracker moves the camera's link";
   EXPECT_EQ(watch.parents["camera_depth_optical_frame"], std::set<std::string>{"camera_depth_frame"});
+  EXPECT_EQ(watch.parents["camera_rgb_optical_frame"], std::set<std::string>{"camera_rgb_frame"});
 
   // The driver stamps each frame with the recording's own time: the sequence's, shifted as the
   // converters say.
@@ -73,6 +87,22 @@ TEST(CameraReplay, TracksTheRecordingAsTheOfflineRunnerDoes) {
     if (next < sequence.size() && std::abs(sequence.timestamp(next) - t) < 1e-4) ++stamps_matched;
   }
   EXPECT_EQ(stamps_matched, watch.poses.size()) << "every pose carries the stamp of one of the sequence's frames";
+
+  // The colour images too, each at its own recorded stamp; and the map is coloured with them.
+  std::set<long long> recorded_colour_us;
+  for (size_t i = 0; i < sequence.size(); ++i) {
+    if (!sequence.colourPath(i).empty()) {
+      recorded_colour_us.insert(std::llround((sequence.colourTimestamp(i) + offset_s) * 1e6));
+    }
+  }
+  const size_t colour_matched = std::count_if(colour_stamps_s.begin(), colour_stamps_s.end(), [&](double t) {
+    return recorded_colour_us.count(std::llround(t * 1e6)) > 0;
+  });
+  std::cout << "[ figures  ] " << camera << " replay: " << colour_stamps_s.size() << " colour images of "
+            << recorded_colour_us.size() << " recorded, " << colour_matched << " at a recorded stamp\n";
+  EXPECT_EQ(colour_matched, colour_stamps_s.size()) << "every colour image carries the stamp it was recorded with";
+  EXPECT_GE(colour_stamps_s.size(), kMinReceivedFraction * recorded_colour_us.size());
+  st::test::expectFusedInColour(watch);
 
   // Every frame that reached the node was processed (one status each) or counted as dropped, from
   // the first status this test saw on (one may still be in flight).

@@ -66,7 +66,7 @@ TEST(FakenectDump, IsWrittenAsFakenectRecordReadsItAndOnlyWhenComplete) {
   }
   ASSERT_TRUE(fs::exists(dump + "/INDEX.txt"));
   EXPECT_FALSE(fs::exists(dump + ".partial"));
-  const std::vector<FakenectDepthFrame> frames = readFakenectDepthFrames(dump);
+  const std::vector<FakenectFrame> frames = readFakenectFrames(dump).depth;
   ASSERT_EQ(frames.size(), 2u);
   EXPECT_NEAR(frames[0].time_s, 1305031102.175304, 1e-6);
   EXPECT_NEAR(frames[1].time_s, 1305031102.211214, 1e-6);
@@ -101,12 +101,12 @@ TEST(FakenectDump, AnIndexWithAStrayLineIsRefusedWithItsLineNumber) {
   const std::string root = test::scratchDirectory("fakenect_index");
   std::ofstream(root + "/INDEX.txt") << "d-1.000000-0.pgm\nnot a file name\n";
   try {
-    readFakenectDepthFrames(root);
+    readFakenectFrames(root);
     FAIL() << "a stray line was accepted";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("line 2"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(readFakenectDepthFrames(root + "/missing"), std::runtime_error);
+  EXPECT_THROW(readFakenectFrames(root + "/missing"), std::runtime_error);
   fs::remove_all(root);
 }
 
@@ -118,15 +118,78 @@ TEST(FakenectDump, AFrameCutShortOrMissingIsNamedWithWhatItLacks) {
     for (int i = 0; i < 3; ++i) writer.addDepth(10.0 + i / 30.0, std::vector<uint16_t>(640 * 480, 1000));
     writer.finish();
   }
-  std::vector<FakenectDepthFrame> frames = readFakenectDepthFrames(dump);
+  std::vector<FakenectFrame> frames = readFakenectFrames(dump).depth;
   ASSERT_EQ(frames.size(), 3u);
   fs::resize_file(frames[1].file, fs::file_size(frames[1].file) / 2);  // a copy that stopped half-way
   fs::remove(frames[2].file);
-  frames = readFakenectDepthFrames(dump);
+  frames = readFakenectFrames(dump).depth;
   EXPECT_EQ(frames[0].problem, "");
-  EXPECT_NE(frames[1].problem.find("holds 307208 bytes of the 614417 a 640x480 frame needs"), std::string::npos)
+  EXPECT_NE(frames[1].problem.find("holds 307208 bytes of the 614417 a 640x480 image needs"), std::string::npos)
       << frames[1].problem;
   EXPECT_EQ(frames[2].problem, "cannot be opened");
+  fs::remove_all(root);
+}
+
+TEST(FakenectDump, CarriesColourImagesBetweenTheDepthFramesInTheOrderTheyCame) {
+  const std::string root = test::scratchDirectory("fakenect_colour");
+  const std::string dump = root + "/dump";
+  ColourImage colour(fakenect::kWidth, fakenect::kHeight, 0);
+  colour.at(0, 0)[0] = 200;  // red
+  colour.at(1, 0)[2] = 100;  // blue
+  {
+    FakenectDumpWriter writer(dump);
+    writer.addDepth(10.0, std::vector<uint16_t>(640 * 480, 1000));
+    writer.addColour(10.01, colour);
+    writer.addDepth(10.033, std::vector<uint16_t>(640 * 480, 1000));
+    EXPECT_THROW(writer.addColour(10.05, ColourImage(320, 240)), std::invalid_argument) << "fakenect plays 640x480";
+    writer.finish();
+  }
+  std::ifstream index(dump + "/INDEX.txt");
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(index, line);) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 3u);
+  EXPECT_EQ(lines[1].rfind("r-10.010000-10000.ppm", 0), 0u) << "fakenect's name for a colour image: " << lines[1];
+  std::ifstream ppm(dump + "/" + lines[1], std::ios::binary);
+  std::string header;
+  std::getline(ppm, header);
+  EXPECT_EQ(header, "P6 640 480 255");
+  uint8_t pixels[6];
+  ppm.read(reinterpret_cast<char*>(pixels), sizeof(pixels));
+  EXPECT_EQ(pixels[0], 200);
+  EXPECT_EQ(pixels[5], 100);
+
+  FakenectFrames frames = readFakenectFrames(dump);
+  ASSERT_EQ(frames.depth.size(), 2u);
+  ASSERT_EQ(frames.colour.size(), 1u);
+  EXPECT_NEAR(frames.colour[0].time_s, 10.01, 1e-6);
+  EXPECT_EQ(frames.colour[0].problem, "");
+  fs::resize_file(frames.colour[0].file, 1000);
+  frames = readFakenectFrames(dump);
+  EXPECT_NE(frames.colour[0].problem.find("holds 1000 bytes of the 921615 a 640x480 image needs"), std::string::npos)
+      << frames.colour[0].problem;
+  std::ofstream(frames.colour[0].file) << "P5 640 480 65535\n";
+  EXPECT_NE(readFakenectFrames(dump).colour[0].problem.find("not \"P6 640 480 <maximum>\""), std::string::npos)
+      << "a depth file where a colour image belongs is named";
+  fs::remove_all(root);
+}
+
+TEST(RecordingOrder, InterleavesTheColourImagesPairedWithTheDepthFramesByTime) {
+  const std::string root = test::scratchDirectory("recording_order");
+  std::ofstream(root + "/depth.txt") << "1.000 depth/a.png\n1.033 depth/b.png\n1.066 depth/c.png\n";
+  // b's colour image comes before it, a's after it; c has none within 20 ms.
+  std::ofstream(root + "/rgb.txt") << "1.010 rgb/a.png\n1.025 rgb/b.png\n1.200 rgb/late.png\n";
+  const TumSequence sequence = TumSequence::open(root);
+  std::vector<RecordedImage> order = recordingOrder(sequence, true);
+  ASSERT_EQ(order.size(), 5u);
+  const std::vector<std::pair<size_t, bool>> expected = {{0, false}, {0, true}, {1, true}, {1, false}, {2, false}};
+  for (size_t i = 0; i < order.size(); ++i) {
+    EXPECT_EQ(order[i].frame, expected[i].first) << "image " << i;
+    EXPECT_EQ(order[i].colour, expected[i].second) << "image " << i;
+    if (i > 0) {
+      EXPECT_LE(order[i - 1].timestamp_s, order[i].timestamp_s);
+    }
+  }
+  EXPECT_EQ(recordingOrder(sequence, false).size(), 3u) << "without colour: the depth frames alone";
   fs::remove_all(root);
 }
 
@@ -153,6 +216,8 @@ TEST(CalibrationFile, HoldsTheIntrinsicsInCameraInfoManagersLayout) {
   const std::string root = test::scratchDirectory("calibration");
   EXPECT_EQ(calibrationFileFor(root), root + "/depth_camera_info.yaml");
   EXPECT_EQ(calibrationFileFor(root + "/x.oni"), root + "/x.oni.yaml");
+  EXPECT_EQ(calibrationFileFor(root, RecordedCamera::kColour), root + "/rgb_camera_info.yaml");
+  EXPECT_EQ(calibrationFileFor(root + "/x.oni", RecordedCamera::kColour), root + "/x.oni.rgb.yaml");
   PinholeCamera camera = PinholeCamera::tumFreiburg1();
   camera.distortion = PinholeCamera::tumCamera("freiburg1")->distortion;
   writeCalibrationFile(root + "/c.yaml", camera, "depth");
