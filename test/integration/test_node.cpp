@@ -246,7 +246,7 @@ TEST(CameraDrivers, WithoutACameraOrRecordingExitWithAnErrorNamingIt) {
   run = st::test::runCommand("ROS_NAMESPACE=no_camera timeout 30 fakenect " + std::string(dump) +
                              " rosrun sdf_tracker kinect_depth_publisher");
   EXPECT_EQ(run.exit_code, 1) << run.output;
-  EXPECT_NE(run.output.find("the recording's calibration " + std::string(dump) +
+  EXPECT_NE(run.output.find("the recording's depth calibration " + std::string(dump) +
                             "/depth_camera_info.yaml cannot be read as a camera calibration"),
             std::string::npos)
       << run.output;
