@@ -172,8 +172,13 @@ void MapPublisher::publishMeshBlocks(const st::TsdfMap& map, const std_msgs::Hea
     if (!chunk_marker_ids_.empty()) clearAll();
     chunkMarker(st::extractMesh(map), 0);
   } else {
-    const bool everything = resend_mesh_blocks_.exchange(false) || T_map_W.matrix() != mesh_blocks_T_map_W_.matrix();
+    // Chunks meshed before the map held colour were sent grey: the first update with colour
+    // sends every chunk again, in colour, not only those that changed.
+    const bool gained_colour = map.holdsColour() && !mesh_blocks_held_colour_;
+    const bool everything =
+        resend_mesh_blocks_.exchange(false) || T_map_W.matrix() != mesh_blocks_T_map_W_.matrix() || gained_colour;
     mesh_blocks_T_map_W_ = T_map_W;
+    mesh_blocks_held_colour_ = map.holdsColour();
     const auto& sparse = static_cast<const st::SparseTsdfMap&>(map);
     const std::vector<st::ChunkedMesher::Chunk> chunks = mesher_.update(sparse, snapshot_.syncedRevision(), everything);
     if (mesher_.restarted()) clearAll();

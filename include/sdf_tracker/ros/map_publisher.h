@@ -80,6 +80,7 @@ class MapPublisher {
   sdf_tracker::ChunkedMesher mesher_;
   std::unordered_map<uint64_t, int> chunk_marker_ids_;  ///< chunk key -> marker id
   Eigen::Isometry3d mesh_blocks_T_map_W_ = Eigen::Isometry3d::Identity();
+  bool mesh_blocks_held_colour_ = false;  ///< the map held colour at the last ~mesh_blocks update
   std::thread thread_;
 };
 
