@@ -19,7 +19,7 @@ target_include_directories(sdf_tracker_eigen SYSTEM INTERFACE ${EIGEN3_INCLUDE_D
 # The tracker: Eigen and OpenMP only.
 sdf_tracker_part(util SOURCES frame_memory memory se3 LINK sdf_tracker_eigen ${SDF_TRACKER_PARALLEL})
 sdf_tracker_part(camera SOURCES camera colour_image depth_image depth_undistortion sensor_model DEPENDS util)
-sdf_tracker_part(map SOURCES block_swap map_merge sparse_tsdf_map tsdf_map tsdf_volume DEPENDS util)
+sdf_tracker_part(map SOURCES block_swap map_merge overlaid_map sparse_tsdf_map tsdf_map tsdf_volume DEPENDS util)
 sdf_tracker_part(fusion SOURCES integrator DEPENDS camera map)
 sdf_tracker_part(tracking SOURCES motion_model tracker DEPENDS camera map)
 sdf_tracker_part(surface SOURCES chunked_mesh raycaster surface DEPENDS camera map)

@@ -369,6 +369,12 @@ std::vector<ParameterSpec> buildTable() {
                          "into both",
                          closed(1, 1000), same(10), kAtStart, kAll,
                          [](auto& s) -> auto& { return s.pipeline.submaps.handover_frames; }));
+  t.push_back(bound<double>("SubmapTrackRecent", "m",
+                            "with SubmapSize: frames are tracked against the active submap and the submaps started "
+                            "within this much path before it, read as one map; 0: against the active one alone, "
+                            "after SubmapHandoverFrames against the one before",
+                            closed(0.0, 1e4), same(4.0), kAtStart, kAll,
+                            [](auto& s) -> auto& { return s.pipeline.submaps.track_recent_m; }));
   t.push_back(bound<bool>("LoopClosure", "",
                           "with SubmapSize: find the view again in submaps that are not recent (the place memory, "
                           "verified and confirmed as a relocalisation is) and place every submap anew by a pose graph",
@@ -498,7 +504,7 @@ std::vector<std::string> Settings::withoutEffect(const std::vector<std::string>&
                     "beyond which blocks go to a swap file there; set MaxMemoryMB too");
   }
   if (!pipeline.submaps.enabled()) {
-    for (const char* name : {"SubmapTurn", "SubmapHandoverFrames"}) {
+    for (const char* name : {"SubmapTurn", "SubmapHandoverFrames", "SubmapTrackRecent"}) {
       if (std::find(given.begin(), given.end(), name) == given.end()) continue;
       notes.push_back(std::string(name) + "=" + toText(findParameter(name)->get(*this)) +
                       " has no effect without SubmapSize, the distance at which a new submap starts; set "

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "sdf_tracker/map/map_merge.h"
+#include "sdf_tracker/map/overlaid_map.h"
 #include "sdf_tracker/map/sparse_tsdf_map.h"
 #include "sdf_tracker/map/tsdf_volume.h"
 #include "sdf_tracker/util/se3.h"
@@ -134,6 +135,7 @@ SdfPipeline::SdfPipeline(const PipelineConfig& config)
 
 void SdfPipeline::clearSubmaps() {
   endHandover();
+  dropRecentSubmaps();
   search_map_.reset();
   search_places_.reset();
   closed_submaps_.clear();
@@ -400,10 +402,35 @@ void SdfPipeline::startSubmap(bool after_search) {
     graph_.addEdge(PoseEdge{closed.node, active_.node, motion, odometryEdgeInformation(config_.loops, motion),
                             PoseEdgeKind::kOdometry});
   }
-  handover_fuses_previous_ = !after_search;
-  handover_map_ = after_search ? search_map_.get() : closed_submaps_.back().map.get();
-  handover_frames_left_ = handover_map_ ? config_.submaps.handover_frames : 0;
+  dropRecentSubmaps();
+  if (!after_search && config_.submaps.track_recent_m > 0.0) {
+    mergeRecentSubmaps();
+  } else {
+    handover_fuses_previous_ = !after_search;
+    handover_map_ = after_search ? search_map_.get() : closed_submaps_.back().map.get();
+    handover_frames_left_ = handover_map_ ? config_.submaps.handover_frames : 0;
+  }
   if (loop_detector_) loop_detector_->startedSubmap();
+}
+
+void SdfPipeline::mergeRecentSubmaps() {
+  std::vector<PlacedMap> parts;
+  const Eigen::Isometry3d T_active_map = active_.T_map_W.inverse();
+  for (size_t i = 0; i < closed_submaps_.size(); ++i) {
+    // Where the camera left submap i: where the next one started.
+    const double left_at_m = i + 1 < closed_submaps_.size() ? closed_submaps_[i + 1].place.path_m : active_.path_m;
+    if (active_.path_m - left_at_m > config_.submaps.track_recent_m) continue;
+    const Submap& submap = closed_submaps_[i];
+    parts.push_back({&static_cast<const SparseTsdfMap&>(*submap.map), T_active_map * submap.place.T_map_W});
+  }
+  if (parts.empty()) return;
+  recent_submaps_ = std::make_unique<SparseTsdfMap>(mergeMaps(parts));
+  tracked_map_ = std::make_unique<OverlaidMap>(*recent_submaps_, *map_, static_cast<float>(config_.integrator.max_weight));
+}
+
+void SdfPipeline::dropRecentSubmaps() {
+  tracked_map_.reset();
+  recent_submaps_.reset();
 }
 
 const SubmapPlace& SdfPipeline::submapPlace(int node) const {

@@ -1,5 +1,6 @@
-// The map as submaps along the path: merging maps (as they are and moved), the pipeline's submaps,
-// their handover, a search in all of them, and the parameters that set them.
+// The map as submaps along the path: merging maps (as they are and moved), reading two as one,
+// the pipeline's submaps, their handover or the recent ones tracked with the active one, a
+// search in all of them, and the parameters that set them.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,6 +9,7 @@
 #include <vector>
 
 #include "sdf_tracker/map/map_merge.h"
+#include "sdf_tracker/map/overlaid_map.h"
 #include "sdf_tracker/pipeline/parameters.h"
 #include "sdf_tracker/pipeline/pipeline.h"
 #include "sdf_tracker/sim/synthetic.h"
@@ -89,15 +91,84 @@ TEST(MapMerge, RefusesPartsOnAnotherLatticeNamingThem) {
   EXPECT_THROW(mergeMaps({{&a}, {nullptr}}), std::invalid_argument);
 }
 
+/// Fills voxels [x0, x1) x [0, 8) x [0, 8) with the plane x = offset_m at one weight.
+void fillPlane(SparseTsdfMap* map, int x0, int x1, float offset_m, float weight) {
+  for (int z = 0; z < 8; ++z) {
+    for (int y = 0; y < 8; ++y) {
+      for (int x = x0; x < x1; ++x) setVoxel(map, {x, y, z}, {map->position(x, y, z).x() - offset_m, weight});
+    }
+  }
+}
+
+TEST(OverlaidMap, ReadsTwoMapsAsTheirMeasurementsFusedInOneWould) {
+  // Over holds x voxels [0, 16), under [8, 24): a plane each, 2 cm apart.
+  SparseTsdfMap over(sparseLattice()), under(sparseLattice());
+  constexpr float kOverWeight = 6.0f, kUnderWeight = 2.0f, kOverPlane = 0.1f, kUnderPlane = 0.12f;
+  fillPlane(&over, 0, 16, kOverPlane, kOverWeight);
+  fillPlane(&under, 8, 24, kUnderPlane, kUnderWeight);
+  const OverlaidMap unsettled(over, under, 64.0f), settled(over, under, kOverWeight);
+  const auto at = [](float x) { return Eigen::Vector3f(x, 0.071f, 0.053f); };
+  const Eigen::AlignedBox3f region(Eigen::Vector3f::Zero(), Eigen::Vector3f::Constant(0.5f));
+  for (const OverlaidMap* map : {&unsettled, &settled}) {
+    const std::unique_ptr<FieldSampler> sampler = map->sampler(region);
+    FieldSample s, r;
+    // Only over holds x = 0.05 m (voxel 2.5), only under x = 0.4 m (voxel 20).
+    ASSERT_TRUE(map->sample(at(0.05f), &s));
+    EXPECT_NEAR(s.distance_m, 0.05f - kOverPlane, 1e-6);
+    EXPECT_EQ(s.weight, kOverWeight);
+    ASSERT_TRUE(map->sample(at(0.4f), &s));
+    EXPECT_NEAR(s.distance_m, 0.4f - kUnderPlane, 1e-6);
+    EXPECT_EQ(s.weight, kUnderWeight);
+    EXPECT_FALSE(map->sample(at(0.6f), &s)) << "neither holds x = 0.6 m";
+    // Both hold x = 0.23 m (voxel 11.5).
+    ASSERT_TRUE(map->sample(at(0.23f), &s));
+    if (map == &unsettled) {
+      const float expected = ((0.23f - kOverPlane) * kOverWeight + (0.23f - kUnderPlane) * kUnderWeight) /
+                             (kOverWeight + kUnderWeight);
+      EXPECT_NEAR(s.distance_m, expected, 1e-6) << "the weighted average where both hold the ground";
+      EXPECT_EQ(s.weight, kOverWeight + kUnderWeight);
+    } else {
+      EXPECT_NEAR(s.distance_m, 0.23f - kOverPlane, 1e-6) << "over alone where its weight is settled";
+    }
+    EXPECT_NEAR(s.gradient.x(), 1.0f, 1e-4);
+    EXPECT_NEAR(s.gradient.tail<2>().norm(), 0.0f, 1e-4);
+    // A region's sampler reads as the map does, everywhere.
+    for (float x = -0.1f; x < 0.6f; x += 0.0137f) {
+      const bool sampled = map->sample(at(x), &s);
+      ASSERT_EQ(sampler->sample(at(x), &r), sampled) << "x = " << x;
+      if (!sampled) continue;
+      EXPECT_EQ(r.distance_m, s.distance_m) << "x = " << x;
+      EXPECT_EQ(r.weight, s.weight) << "x = " << x;
+    }
+  }
+  EXPECT_TRUE(unsettled.holdableRegion().contains(over.holdableRegion()));
+  EXPECT_TRUE(unsettled.holdableRegion().contains(under.holdableRegion()));
+  EXPECT_EQ(unsettled.voxelCount(), over.voxelCount() + under.voxelCount());
+}
+
+TEST(OverlaidMap, IsAReadOnlyViewOfOneLattice) {
+  SparseTsdfMap a(sparseLattice(0.02)), b(sparseLattice(0.03));
+  EXPECT_THROW(OverlaidMap(a, b, 64.0f), std::invalid_argument);
+  EXPECT_THROW(OverlaidMap(a, a, 0.0f), std::invalid_argument);
+  OverlaidMap view(a, a, 64.0f);
+  EXPECT_THROW(view.clear(), std::logic_error);
+  EXPECT_THROW(view.enableColour(), std::logic_error);
+  EXPECT_THROW(view.clone(), std::logic_error);
+  EXPECT_EQ(view.memoryBytes(), 0u);
+}
+
 constexpr double kFramePeriod_s = 1.0 / 30.0;
 constexpr double kDeskDuration_s = 10.0;
 
-/// The default preset (a sparse map) of 3 cm voxels, with submaps every `size_m`.
-PipelineConfig submapPipeline(double size_m, int handover_frames) {
+/// The default preset (a sparse map) of 3 cm voxels, with submaps every `size_m`, each tracked
+/// against the one before for `handover_frames` and then alone, or (track_recent_m) with the
+/// submaps the camera left within that path.
+PipelineConfig submapPipeline(double size_m, int handover_frames, double track_recent_m = 0.0) {
   PipelineConfig config = preset("default").pipeline;
   config.volume.voxel_size_m = 0.03;
   config.submaps.max_distance_m = size_m;
   config.submaps.handover_frames = handover_frames;
+  config.submaps.track_recent_m = track_recent_m;
   return config;
 }
 
@@ -151,6 +222,43 @@ TEST(Submaps, ANewSubmapStartsAlongThePathAndTracksAgainstTheOneBeforeFirst) {
   for (const Submap& submap : pipeline.closedSubmaps()) weight += test::totalWeight(*submap.map);
   EXPECT_NEAR(test::totalWeight(*pipeline.copyWholeMap()), weight, 1e-6 * weight);
   EXPECT_GT(pipeline.mapMemoryBytes(), pipeline.map().memoryBytes());
+}
+
+TEST(Submaps, RecentSubmapsAreTrackedWithTheActiveOneAsOneMap) {
+  // The desk path passes over the same ground again and again: with the submaps left within 4 m
+  // overlaid on the active one, each frame is tracked against what one map would hold there, and
+  // no frame needs a handover.
+  constexpr int kFrames = 90;
+  const PinholeCamera camera = test::testCamera().scaledTo(160, 120);
+  SdfPipeline recent(submapPipeline(0.1, 5, 4.0)), alone(submapPipeline(0.1, 5, 0.0)), one_map(submapPipeline(0.0, 5));
+  double worst_recent_m = 0.0, worst_alone_m = 0.0, worst_one_map_m = 0.0;
+  int started = 0, fused = 0;
+  for (int i = 0; i < kFrames; ++i) {
+    const DepthImage depth = deskFrame(i, camera);
+    const double t_s = i * kFramePeriod_s;
+    const FrameReport report = recent.processFrame(depth, camera, t_s);
+    ASSERT_TRUE(report.track.ok()) << "frame " << i << ": " << report.track.message;
+    EXPECT_FALSE(report.tracked_in_previous_submap) << "frame " << i << " was handed over";
+    started += report.started_submap;
+    fused += report.fused;
+    ASSERT_TRUE(alone.processFrame(depth, camera, t_s).track.ok()) << i;
+    ASSERT_TRUE(one_map.processFrame(depth, camera, t_s).track.ok()) << i;
+    const Eigen::Vector3d truth = deskPose(i).translation();
+    worst_recent_m = std::max(worst_recent_m, (recent.pose().translation() - truth).norm());
+    worst_alone_m = std::max(worst_alone_m, (alone.pose().translation() - truth).norm());
+    worst_one_map_m = std::max(worst_one_map_m, (one_map.pose().translation() - truth).norm());
+  }
+  std::cout << "[ figures  ] " << recent.submapCount() << " submaps; worst position error " << worst_recent_m * 1e3
+            << " mm with the recent ones, " << worst_alone_m * 1e3 << " mm alone, " << worst_one_map_m * 1e3
+            << " mm in one map\n";
+  ASSERT_GE(started, 3);
+  EXPECT_LT(worst_recent_m, worst_one_map_m + 0.002) << "tracked with the recent submaps, no worse than one map";
+  // Each fused frame went into one submap only: no handover fuses it into two.
+  int fused_in_submaps = 0;
+  for (int node = 0; node < static_cast<int>(recent.submapCount()); ++node) {
+    fused_in_submaps += recent.submapPlace(node).frames_fused;
+  }
+  EXPECT_EQ(fused_in_submaps, fused);
 }
 
 TEST(Submaps, ACameraLostAndBackInAnOldSubmapIsFoundInTheWholeMap) {
@@ -209,6 +317,9 @@ TEST(Submaps, ParametersRefuseWhatSubmapsCannotDoYetByName) {
   EXPECT_NE(notes[0].find("SubmapTurn=30 has no effect without SubmapSize"), std::string::npos) << notes[0];
   EXPECT_THROW(setParameterFromText(&unused, "SubmapTurn", "0"), std::invalid_argument);
   EXPECT_THROW(setParameterFromText(&unused, "SubmapHandoverFrames", "0"), std::invalid_argument);
+  setParameterFromText(&unused, "SubmapTrackRecent", "2");
+  ASSERT_EQ(unused.withoutEffect({"SubmapTrackRecent"}).size(), 1u);
+  EXPECT_THROW(setParameterFromText(&unused, "SubmapTrackRecent", "-1"), std::invalid_argument);
 }
 
 }  // namespace

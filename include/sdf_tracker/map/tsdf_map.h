@@ -82,6 +82,7 @@ struct VolumeConfig {
 struct FieldSample {
   float distance_m;
   Eigen::Vector3f gradient;  ///< d(distance)/d(position), per metre of world.
+  float weight = 0.0f;       ///< the mean of the eight corners' weights: how much of what was fused lies there
 };
 
 /// Samples one map many times over one region of space: what a loop over a frame's points uses
@@ -183,6 +184,8 @@ inline bool TsdfMap::interpolate(const Voxel (&c)[8], const Eigen::Vector3f& f, 
   for (const Voxel& v : c) {
     if (v.weight <= 0.0f) return false;
   }
+  out->weight = 0.125f * (c[0].weight + c[1].weight + c[2].weight + c[3].weight + c[4].weight + c[5].weight +
+                          c[6].weight + c[7].weight);
   const float x = f.x(), y = f.y(), z = f.z();
   // Interpolate along x on the four x-edges, then along y, then along z.
   const float d00 = c[0].distance_m + x * (c[1].distance_m - c[0].distance_m);

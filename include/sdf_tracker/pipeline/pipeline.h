@@ -175,7 +175,8 @@ struct FrameReport {
   /// written stay in memory; blocks that could not be read back stay in the file.
   std::string swap_error;
   RelocalisationReport relocalisation;
-  /// The frame started a new submap (it is fused into it and into the one before).
+  /// The frame started a new submap (it is fused into it, and during a handover into the one
+  /// before too).
   bool started_submap = false;
   /// The frame was tracked against the submap before the active one (its first frames, see
   /// SubmapConfig::handover_frames), or against the whole map it was just found in.
@@ -335,14 +336,21 @@ class SdfPipeline {
   /// The relocaliser's step on a frame whose pose is not known; fills report->relocalisation and,
   /// once a candidate is accepted, report->track and the pose. Returns whether it was accepted.
   bool search(const DepthImage& filtered, const PinholeCamera& camera, FrameReport* report);
-  /// What frames are tracked against: the active submap, or during a handover the map before it.
-  const TsdfMap& trackingMap() const { return handover_map_ ? *handover_map_ : *map_; }
+  /// What frames are tracked against: the active submap (with the recent ones overlaid), or during
+  /// a handover the map before it.
+  const TsdfMap& trackingMap() const {
+    return handover_map_ ? *handover_map_ : tracked_map_ ? *tracked_map_ : *map_;
+  }
   /// What a search looks in: the whole map (submaps merged while it runs), or the active one.
   const TsdfMap& searchMap() const { return search_map_ ? *search_map_ : *map_; }
   /// Closes the active submap (when it holds anything) and starts a new one at T_W_C_, its first
   /// frames tracked against the closed one and fused into both, or, `after_search`, tracked
   /// against the whole map the camera was found in.
   void startSubmap(bool after_search);
+  /// With SubmapConfig::track_recent_m: merges the submaps the camera left within that path (the
+  /// one before always) in the active one's frame, and overlays them on it for tracking.
+  void mergeRecentSubmaps();
+  void dropRecentSubmaps();
   /// Ends a handover (or none): frames are tracked against the active submap alone.
   void endHandover();
   /// Frees a search's copy of the whole map unless a handover still tracks against it.
@@ -397,6 +405,11 @@ class SdfPipeline {
   /// camera until the new submap's handover ends.
   std::unique_ptr<TsdfMap> search_map_;
   std::vector<Submap> closed_submaps_;
+  /// With SubmapConfig::track_recent_m: the submaps the camera left within that path, merged in
+  /// the active one's frame when it started (not moved by later graph solutions until the next
+  /// one starts), and the overlay of them on the active submap that frames are tracked against.
+  std::unique_ptr<TsdfMap> recent_submaps_;
+  std::unique_ptr<TsdfMap> tracked_map_;
   /// Where the active submap (map_) lies.
   SubmapPlace active_;
   /// The keyframes while a search runs in the merged submaps, at their places in the map frame.
