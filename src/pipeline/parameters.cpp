@@ -370,8 +370,8 @@ std::vector<ParameterSpec> buildTable() {
                          closed(1, 1000), same(10), kAtStart, kAll,
                          [](auto& s) -> auto& { return s.pipeline.submaps.handover_frames; }));
   t.push_back(bound<double>("SubmapTrackRecent", "m",
-                            "with SubmapSize: frames are tracked against the active submap and the submaps started "
-                            "within this much path before it, read as one map; 0: against the active one alone, "
+                            "with SubmapSize: frames are tracked against the active submap and the submaps the camera "
+                            "left within this much path before it, read as one map; 0: against the active one alone, "
                             "after SubmapHandoverFrames against the one before",
                             closed(0.0, 1e4), same(4.0), kAtStart, kAll,
                             [](auto& s) -> auto& { return s.pipeline.submaps.track_recent_m; }));

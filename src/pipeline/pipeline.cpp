@@ -70,6 +70,12 @@ VolumeConfig placedVolume(const PipelineConfig& config) {
   return volume;
 }
 
+/// A submap as a part of a merge, placed by T_target_W. Submaps are sparse maps without a budget
+/// (PipelineConfig::validate).
+PlacedMap placedSubmap(const TsdfMap& submap, const Eigen::Isometry3d& T_target_W) {
+  return {&static_cast<const SparseTsdfMap&>(submap), T_target_W};
+}
+
 }  // namespace
 
 std::vector<std::string> PipelineConfig::validate() const {
@@ -297,13 +303,10 @@ void SdfPipeline::evictAwayFrom(const Eigen::Isometry3d& T_W_C, const PinholeCam
 
 std::unique_ptr<TsdfMap> SdfPipeline::copyWholeMap() const {
   if (!closed_submaps_.empty()) {
-    // Submaps are sparse maps without a budget (PipelineConfig::validate), each where the graph
-    // places it.
+    // Each where the graph places it.
     std::vector<PlacedMap> parts;
-    for (const Submap& submap : closed_submaps_) {
-      parts.push_back({&static_cast<const SparseTsdfMap&>(*submap.map), submap.place.T_map_W});
-    }
-    parts.push_back({&static_cast<const SparseTsdfMap&>(*map_), active_.T_map_W});
+    for (const Submap& submap : closed_submaps_) parts.push_back(placedSubmap(*submap.map, submap.place.T_map_W));
+    parts.push_back(placedSubmap(*map_, active_.T_map_W));
     return std::make_unique<SparseTsdfMap>(mergeMaps(parts));
   }
   if (!budget_ || budget_->swap().size() == 0) return map_->clone();
@@ -370,7 +373,8 @@ bool SdfPipeline::search(const DepthImage& filtered, const PinholeCamera& camera
 }
 
 size_t SdfPipeline::mapMemoryBytes() const {
-  size_t bytes = map_->memoryBytes() + (search_map_ ? search_map_->memoryBytes() : 0);
+  size_t bytes = map_->memoryBytes() + (search_map_ ? search_map_->memoryBytes() : 0) +
+                 (recent_submaps_ ? recent_submaps_->memoryBytes() : 0);
   for (const Submap& submap : closed_submaps_) bytes += submap.map->memoryBytes();
   return bytes;
 }
@@ -420,8 +424,7 @@ void SdfPipeline::mergeRecentSubmaps() {
     // Where the camera left submap i: where the next one started.
     const double left_at_m = i + 1 < closed_submaps_.size() ? closed_submaps_[i + 1].place.path_m : active_.path_m;
     if (active_.path_m - left_at_m > config_.submaps.track_recent_m) continue;
-    const Submap& submap = closed_submaps_[i];
-    parts.push_back({&static_cast<const SparseTsdfMap&>(*submap.map), T_active_map * submap.place.T_map_W});
+    parts.push_back(placedSubmap(*closed_submaps_[i].map, T_active_map * closed_submaps_[i].place.T_map_W));
   }
   if (parts.empty()) return;
   recent_submaps_ = std::make_unique<SparseTsdfMap>(mergeMaps(parts));

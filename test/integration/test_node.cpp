@@ -260,11 +260,12 @@ class NodeColourTest : public NodeTest {
   }
   /// The cloud's points whose colour is within `levels` of `colour` in each channel (none when it
   /// has no rgb field).
+  static bool hasRgb(const sensor_msgs::PointCloud2& cloud) {
+    return std::any_of(cloud.fields.begin(), cloud.fields.end(),
+                       [](const sensor_msgs::PointField& f) { return f.name == "rgb"; });
+  }
   static size_t pointsOfColour(const sensor_msgs::PointCloud2& cloud, const st::Rgb& colour, int levels) {
-    if (std::none_of(cloud.fields.begin(), cloud.fields.end(),
-                     [](const sensor_msgs::PointField& f) { return f.name == "rgb"; })) {
-      return 0;
-    }
+    if (!hasRgb(cloud)) return 0;
     size_t n = 0;
     sensor_msgs::PointCloud2ConstIterator<uint8_t> r(cloud, "r"), g(cloud, "g"), b(cloud, "b");
     for (; r != r.end(); ++r, ++g, ++b) {
@@ -375,9 +376,7 @@ TEST_F(NodeColourTest, ColourItCannotUseIsNamedAndTheDepthIsTrackedAndFusedWitho
   ASSERT_TRUE(cloud) << "no ~cloud stamped " << last_stamp;
   const size_t points = cloud->width * cloud->height;
   EXPECT_GT(points, 1000u);
-  const bool has_rgb = std::any_of(cloud->fields.begin(), cloud->fields.end(),
-                                   [](const sensor_msgs::PointField& f) { return f.name == "rgb"; });
-  if (has_rgb) {
+  if (hasRgb(*cloud)) {
     EXPECT_EQ(pointsOfColour(*cloud, st::kUnseenColour, 0), points) << "points of ~cloud carry colour";
   }
 

@@ -247,7 +247,8 @@ class SdfPipeline {
   const std::vector<Submap>& closedSubmaps() const { return closed_submaps_; }
   /// The submaps, the active one included (1 without submaps).
   size_t submapCount() const { return closed_submaps_.size() + 1; }
-  /// Bytes the map's voxels hold in memory, every submap's (and a search's copy of them all).
+  /// Bytes the map's voxels hold in memory, every submap's (and a search's copy of them all, and
+  /// the recent submaps merged for tracking).
   size_t mapMemoryBytes() const;
   /// Where the camera was when the active submap started.
   const Eigen::Isometry3d& activeSubmapAnchor() const { return active_.T_W_anchor; }
@@ -343,13 +344,15 @@ class SdfPipeline {
   }
   /// What a search looks in: the whole map (submaps merged while it runs), or the active one.
   const TsdfMap& searchMap() const { return search_map_ ? *search_map_ : *map_; }
-  /// Closes the active submap (when it holds anything) and starts a new one at T_W_C_, its first
-  /// frames tracked against the closed one and fused into both, or, `after_search`, tracked
-  /// against the whole map the camera was found in.
+  /// Closes the active submap (when it holds anything) and starts a new one at T_W_C_, tracked
+  /// against with the recent submaps overlaid (SubmapConfig::track_recent_m) or, without them, its
+  /// first frames tracked against the closed one and fused into both; `after_search`, its first
+  /// frames tracked against the whole map the camera was found in.
   void startSubmap(bool after_search);
   /// With SubmapConfig::track_recent_m: merges the submaps the camera left within that path (the
   /// one before always) in the active one's frame, and overlays them on it for tracking.
   void mergeRecentSubmaps();
+  /// Frees them: frames are tracked against the active submap alone (or a handover's map).
   void dropRecentSubmaps();
   /// Ends a handover (or none): frames are tracked against the active submap alone.
   void endHandover();

@@ -22,8 +22,8 @@ struct SubmapConfig {
   /// The first frames of a new submap are tracked against the one before and fused into both, so
   /// that the new one holds the view before the tracker relies on it alone.
   int handover_frames = 10;
-  /// Frames are tracked against the active submap and the submaps started within this much path
-  /// before it, read as one map (merged when the submap starts, overlaid on it): ground seen again
+  /// Frames are tracked against the active submap and the submaps the camera left within this much
+  /// path before it started (the one before always), read as one map (merged when the submap starts, overlaid on it): ground seen again
   /// after a short path is tracked as one map would track it, while each submap keeps only its own
   /// frames [m]. 0: the active submap alone, after the handover.
   double track_recent_m = 4.0;
