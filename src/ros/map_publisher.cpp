@@ -4,6 +4,8 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
+#include <unordered_set>
+
 #include <visualization_msgs/Marker.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -11,6 +13,7 @@
 #include <omp.h>
 #endif
 
+#include "sdf_tracker/map/map_merge.h"
 #include "sdf_tracker/map/sparse_tsdf_map.h"
 #include "sdf_tracker/map/tsdf_volume.h"
 #include "sdf_tracker/ros/conversions.h"
@@ -24,6 +27,8 @@ namespace {
 
 /// Niceness of the extraction thread: it runs on what the tracker leaves of the CPU.
 constexpr int kBackgroundNice = 10;
+/// ~mesh_blocks messages kept for a subscriber that has not taken them yet.
+constexpr uint32_t kMeshBlocksQueue = 100;
 
 }  // namespace
 
@@ -85,11 +90,11 @@ const st::TsdfMap* MapSnapshot::update(int slabs_per_lock, int blocks_per_lock) 
   }
 }
 
-MapPublisher::MapPublisher(ros::NodeHandle pnh, std::mutex& map_mutex,
-                           std::function<const st::TsdfMap*()> live, std::function<Eigen::Isometry3d()> T_map_W,
-                           std::function<ros::Time()> stamp, std::string map_frame, double cloud_rate_hz,
-                           double mesh_rate_hz)
-    : snapshot_(map_mutex, std::move(live)),
+MapPublisher::MapPublisher(ros::NodeHandle pnh, std::mutex& map_mutex, std::function<std::vector<LiveMapPart>()> live,
+                           std::function<Eigen::Isometry3d()> T_map_W, std::function<ros::Time()> stamp,
+                           std::string map_frame, double cloud_rate_hz, double mesh_rate_hz)
+    : map_mutex_(map_mutex),
+      live_(std::move(live)),
       T_map_W_(std::move(T_map_W)),
       stamp_(std::move(stamp)),
       map_frame_(std::move(map_frame)),
@@ -97,9 +102,10 @@ MapPublisher::MapPublisher(ros::NodeHandle pnh, std::mutex& map_mutex,
       mesh_period_s_(mesh_rate_hz > 0.0 ? 1.0 / mesh_rate_hz : 0.0) {
   cloud_pub_ = pnh.advertise<sensor_msgs::PointCloud2>("cloud", 1, true);
   mesh_pub_ = pnh.advertise<visualization_msgs::Marker>("mesh", 1, true);
-  // Not latched: each message holds only what changed; a new subscriber is sent everything.
+  // Not latched: each message holds only what changed; a new subscriber is sent everything. A
+  // message dropped would lose its chunks for good: a queue that a slow viewer does not overrun.
   mesh_blocks_pub_ = pnh.advertise<visualization_msgs::MarkerArray>(
-      "mesh_blocks", 1, [this](const ros::SingleSubscriberPublisher&) { resend_mesh_blocks_ = true; });
+      "mesh_blocks", kMeshBlocksQueue, [this](const ros::SingleSubscriberPublisher&) { resend_mesh_blocks_ = true; });
   if (cloud_period_s_ > 0.0 || mesh_period_s_ > 0.0) thread_ = std::thread(&MapPublisher::run, this);
 }
 
@@ -136,56 +142,150 @@ void MapPublisher::run() {
     if (now >= next_cloud) next_cloud = now + periodOf(cloud_period_s_);
     if (now >= next_mesh) next_mesh = now + periodOf(mesh_period_s_);
     if (!cloud_due && !mesh_due && !mesh_blocks_due) continue;
-    const st::TsdfMap* map = snapshot_.update();
-    if (!map) continue;
     std_msgs::Header header;
     header.stamp = stamp_();
     header.frame_id = map_frame_;
+    if (!updateParts()) continue;
     const Eigen::Isometry3d T_map_W = T_map_W_();
-    if (cloud_due) cloud_pub_.publish(toCloudMsg(st::extractSurfaceCloud(*map), header, T_map_W, colour_));
-    if (mesh_due) mesh_pub_.publish(toMarker(st::extractMesh(*map), header, T_map_W));
-    if (mesh_blocks_due) publishMeshBlocks(*map, header, T_map_W);
+    if (cloud_due || mesh_due) {
+      const st::TsdfMap& map = wholeMap();
+      if (cloud_due) cloud_pub_.publish(toCloudMsg(st::extractSurfaceCloud(map), header, T_map_W, colour_));
+      if (mesh_due) mesh_pub_.publish(toMarker(st::extractMesh(map), header, T_map_W));
+    }
+    if (mesh_blocks_due) publishMeshBlocks(header, T_map_W);
   }
 }
 
-void MapPublisher::publishMeshBlocks(const st::TsdfMap& map, const std_msgs::Header& header,
-                                     const Eigen::Isometry3d& T_map_W) {
+visualization_msgs::Marker MapPublisher::chunkMarker(const st::TriangleMesh& mesh, int id, const std_msgs::Header& header,
+                                                     const Eigen::Isometry3d& T_map_part) {
+  visualization_msgs::Marker marker = toMarker(mesh, header, T_map_part);
+  marker.ns = "mesh_blocks";
+  marker.id = id;
+  if (mesh.triangles.empty()) marker.action = visualization_msgs::Marker::DELETE;
+  return marker;
+}
+
+bool MapPublisher::updateParts() {
+  std::vector<Eigen::Isometry3d> placements;
+  {
+    std::lock_guard<std::mutex> lock(map_mutex_);
+    for (const LiveMapPart& part : live_()) placements.push_back(part.T_W_part);
+  }
+  // Parts the map no longer has (a reset, another map loaded): the viewer starts over.
+  if (parts_.size() > placements.size()) {
+    parts_.resize(placements.size());
+    start_over_ = true;
+  }
+  while (parts_.size() < placements.size()) {
+    const size_t index = parts_.size();
+    Part part;
+    part.snapshot = std::make_unique<MapSnapshot>(map_mutex_, [this, index]() -> const st::TsdfMap* {
+      const std::vector<LiveMapPart> live = live_();
+      return index < live.size() ? live[index].map : nullptr;
+    });
+    parts_.push_back(std::move(part));
+  }
+  for (size_t i = 0; i < parts_.size(); ++i) {
+    parts_[i].T_W_part = placements[i];
+    parts_[i].copy = parts_[i].snapshot->update();
+    if (!parts_[i].copy) return false;  // the map changed since the parts were counted: next time
+  }
+  return !parts_.empty();
+}
+
+const st::TsdfMap& MapPublisher::wholeMap() {
+  if (parts_.size() == 1 && parts_.front().T_W_part.matrix() == Eigen::Matrix4d::Identity()) return *parts_.front().copy;
+  // The submaps before the active one merged once, until one of them changes or moves (a new
+  // submap, a pose graph solution); each time only the active one is merged onto them.
+  std::vector<ClosedPartState> closed;
+  std::vector<st::PlacedMap> placed;
+  for (size_t i = 0; i + 1 < parts_.size(); ++i) {
+    const Part& part = parts_[i];
+    closed.push_back({part.copy->identity(), part.snapshot->syncedRevision(), part.T_W_part.matrix()});
+    placed.push_back({&static_cast<const st::SparseTsdfMap&>(*part.copy), part.T_W_part});
+  }
+  if (!closed_merged_ || closed != closed_merged_state_) {
+    closed_merged_ = std::make_unique<st::SparseTsdfMap>(st::mergeMaps(placed));
+    closed_merged_state_ = std::move(closed);
+  }
+  const Part& active = parts_.back();
+  merged_ = std::make_unique<st::SparseTsdfMap>(st::mergeMaps(
+      {{closed_merged_.get(), Eigen::Isometry3d::Identity()},
+       {&static_cast<const st::SparseTsdfMap&>(*active.copy), active.T_W_part}}));
+  return *merged_;
+}
+
+void MapPublisher::publishMeshBlocks(const std_msgs::Header& header, const Eigen::Isometry3d& T_map_W) {
   visualization_msgs::MarkerArray array;
-  auto clearAll = [&] {
+  auto startOver = [&] {
     visualization_msgs::Marker clear;
     clear.header = header;
     clear.ns = "mesh_blocks";
     clear.action = visualization_msgs::Marker::DELETEALL;
     array.markers.push_back(clear);
-    chunk_marker_ids_.clear();
+    for (Part& part : parts_) part.chunks.clear();
+    next_marker_id_ = 1;
   };
-  auto chunkMarker = [&](const st::TriangleMesh& mesh, int id) {
-    visualization_msgs::Marker marker = toMarker(mesh, header, T_map_W);
-    marker.ns = "mesh_blocks";
-    marker.id = id;
-    if (mesh.triangles.empty()) marker.action = visualization_msgs::Marker::DELETE;
-    array.markers.push_back(std::move(marker));
-  };
-  if (map.type() == st::MapType::kDense) {
+  const bool resend = resend_mesh_blocks_.exchange(false);
+  if (parts_.size() == 1 && parts_.front().copy->type() == st::MapType::kDense) {
     // One marker of the whole mesh; the chunks of a sparse map shown before go.
-    resend_mesh_blocks_ = false;
-    if (!chunk_marker_ids_.empty()) clearAll();
-    chunkMarker(st::extractMesh(map), 0);
-  } else {
-    // Chunks meshed before the map held colour were sent grey: the first update with colour
-    // sends every chunk again, in colour, not only those that changed.
-    const bool gained_colour = map.holdsColour() && !mesh_blocks_held_colour_;
-    const bool everything =
-        resend_mesh_blocks_.exchange(false) || T_map_W.matrix() != mesh_blocks_T_map_W_.matrix() || gained_colour;
-    mesh_blocks_T_map_W_ = T_map_W;
-    mesh_blocks_held_colour_ = map.holdsColour();
-    const auto& sparse = static_cast<const st::SparseTsdfMap&>(map);
-    const std::vector<st::ChunkedMesher::Chunk> chunks = mesher_.update(sparse, snapshot_.syncedRevision(), everything);
-    if (mesher_.restarted()) clearAll();
-    for (const st::ChunkedMesher::Chunk& chunk : chunks) {
-      const int next_id = static_cast<int>(chunk_marker_ids_.size()) + 1;  // 0 is the dense grid's
-      const auto id = chunk_marker_ids_.emplace(st::SparseTsdfMap::keyOf(chunk.index), next_id);
-      chunkMarker(chunk.mesh, id.first->second);
+    if (!dense_shown_) startOver();
+    Part& part = parts_.front();
+    array.markers.push_back(chunkMarker(st::extractMesh(*part.copy), 0, header, T_map_W * part.T_W_part));
+    dense_shown_ = true;
+    start_over_ = false;
+    mesh_blocks_pub_.publish(array);
+    return;
+  }
+  // The chunks of each part that changed; every chunk of every part when the viewer starts over
+  // (a new viewer, a part replaced or cleared, parts dropped): the array then begins with
+  // DELETEALL. A part meshed for the first time (a new submap) is only added to.
+  bool start_over = resend || start_over_ || dense_shown_;
+  std::vector<std::vector<st::ChunkedMesher::Chunk>> updates(parts_.size());
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    bool restarted = false;
+    for (size_t i = 0; i < parts_.size(); ++i) {
+      Part& part = parts_[i];
+      const auto& sparse = static_cast<const st::SparseTsdfMap&>(*part.copy);
+      // Chunks meshed before the map held colour were sent grey: the first update with colour
+      // sends every chunk again, in colour, not only those that changed.
+      const bool gained_colour = sparse.holdsColour() && !part.held_colour;
+      updates[i] = part.mesher.update(sparse, part.snapshot->syncedRevision(), start_over || gained_colour);
+      restarted |= part.mesher.restarted() && part.meshed && !start_over;
+      part.meshed = true;
+      part.held_colour = sparse.holdsColour();
+    }
+    if (!restarted) break;
+    start_over = true;  // a part's map was replaced or cleared: everything again, from the start
+  }
+  if (start_over) startOver();
+  start_over_ = false;
+  dense_shown_ = false;
+  for (size_t i = 0; i < parts_.size(); ++i) {
+    Part& part = parts_[i];
+    const Eigen::Isometry3d T_map_part = T_map_W * part.T_W_part;
+    // A part the pose graph moved (or the map frame, restored): its chunks again, at the new place.
+    const bool moved = T_map_part.matrix() != part.shown_T_map_part.matrix();
+    part.shown_T_map_part = T_map_part;
+    std::unordered_set<uint64_t> sent;
+    for (st::ChunkedMesher::Chunk& chunk : updates[i]) {
+      const uint64_t key = st::SparseTsdfMap::keyOf(chunk.index);
+      const auto shown = part.chunks.find(key);
+      if (chunk.mesh.triangles.empty()) {
+        if (shown == part.chunks.end()) continue;
+        array.markers.push_back(chunkMarker(chunk.mesh, shown->second.first, header, T_map_part));
+        part.chunks.erase(shown);
+        continue;
+      }
+      const int id = shown != part.chunks.end() ? shown->second.first : next_marker_id_++;
+      array.markers.push_back(chunkMarker(chunk.mesh, id, header, T_map_part));
+      part.chunks[key] = {id, std::move(chunk.mesh)};
+      sent.insert(key);
+    }
+    if (moved) {
+      for (const auto& [key, shown] : part.chunks) {
+        if (!sent.count(key)) array.markers.push_back(chunkMarker(shown.second, shown.first, header, T_map_part));
+      }
     }
   }
   if (!array.markers.empty()) mesh_blocks_pub_.publish(array);

@@ -72,7 +72,12 @@ std::string MapServices::outputPath(const std::string& requested, const std::str
 std::unique_ptr<st::TsdfMap> MapServices::copyMap(std::vector<st::io::StampedPose>* trajectory,
                                                   st::PlaceMemory* places) {
   std::lock_guard<std::mutex> lock(state_.mutex);
-  if (trajectory) *trajectory = state_.trajectory;
+  if (trajectory) {
+    // Where the pose graph places each pose now, in ~map_frame.
+    *trajectory = state_.path.placed(*state_.pipeline);
+    const Eigen::Isometry3d T_map_W = poses_.T_map_W();
+    for (st::io::StampedPose& pose : *trajectory) pose.T_W_C = T_map_W * pose.T_W_C;
+  }
   if (places) *places = state_.pipeline->places();
   return state_.pipeline->copyWholeMap();  // swapped blocks (MaxMemoryMB) included
 }
@@ -138,7 +143,7 @@ bool MapServices::answer(Response& res, const std::function<std::string()>& acti
 bool MapServices::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
   std::lock_guard<std::mutex> lock(state_.mutex);
   state_.pipeline->reset();
-  state_.trajectory.clear();
+  state_.path.clear();
   state_.restarted = true;
   ROS_INFO("sdf_tracker: map and pose reset");
   return true;
@@ -221,7 +226,7 @@ bool MapServices::loadVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
     const std::string grey =
         st::io::describeLoadedColour(*loaded, state_.pipeline->config().fuse_colour && options_.colourUsable());
     state_.pipeline->setMap(std::move(loaded), std::move(places));
-    state_.trajectory.clear();
+    state_.path.clear();
     state_.restarted = true;
     if (T_map_W) poses_.restoreMapFrame(*T_map_W);
     return "tracking against " + path + ", which " + held + "; " + describeLoadedMapFrame(T_map_W.has_value()) +

@@ -7,7 +7,8 @@ namespace sdf_tracker_ros {
 using diagnostic_msgs::DiagnosticStatus;
 
 NodeDiagnostics::NodeDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& hardware_id,
-                                 const std::string& odometry_transform, const std::string& colour_topic)
+                                 const std::string& odometry_transform, const std::string& colour_topic,
+                                 bool loop_closure)
     : updater_(nh, pnh, pnh.getNamespace()),  // the nodelet's own name, not its manager's
       odometry_transform_(odometry_transform),
       colour_topic_(colour_topic) {
@@ -16,6 +17,7 @@ NodeDiagnostics::NodeDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const 
   updater_.add("tracking", this, &NodeDiagnostics::tracking);
   if (!odometry_transform_.empty()) updater_.add("odometry", this, &NodeDiagnostics::odometry);
   if (!colour_topic_.empty()) updater_.add("colour", this, &NodeDiagnostics::colour);
+  if (loop_closure) updater_.add("loop closure", this, &NodeDiagnostics::loopClosure);
   // The updater publishes at its own period (~diagnostic_period, 1 s); it has to be asked often.
   timer_ = nh.createTimer(ros::Duration(0.25), [this](const ros::TimerEvent&) { updater_.update(); });
 }
@@ -27,6 +29,35 @@ void NodeDiagnostics::frameProcessed(const sdf_tracker::TrackingStatus& status, 
   trim(now);
   last_ = status;
   any_ = true;
+  if (status.loop_solved) {
+    last_solution_ = status;
+    last_solution_wall_ = now;
+  }
+}
+
+void NodeDiagnostics::loopClosure(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!any_) {
+    stat.summary(DiagnosticStatus::OK, "no frame yet");
+    return;
+  }
+  stat.add("active submap", last_.submap);
+  stat.add("loops kept", last_.loops_closed);
+  stat.add("loops found wrong", last_.loops_rejected);
+  if (last_solution_) {
+    stat.add("last correction [m]", last_solution_->loop_correction_m);
+    stat.add("last correction [deg]", last_solution_->loop_correction_deg);
+    stat.add("seconds since the last correction", (ros::WallTime::now() - last_solution_wall_).toSec());
+  }
+  if (last_.loops_rejected > 0) {
+    stat.summaryf(DiagnosticStatus::WARN, "%u loop(s) kept; %u found wrong by the pose graph and left out",
+                  last_.loops_closed, last_.loops_rejected);
+  } else if (!last_solution_) {
+    stat.summaryf(DiagnosticStatus::OK, "no loop closed yet (submap %u)", last_.submap);
+  } else {
+    stat.summaryf(DiagnosticStatus::OK, "%u loop(s) kept; the last moved the camera %.3f m, %.2f deg",
+                  last_.loops_closed, last_solution_->loop_correction_m, last_solution_->loop_correction_deg);
+  }
 }
 
 void NodeDiagnostics::odometryLookedUp(const std::string& problem) {

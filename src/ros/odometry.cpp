@@ -38,6 +38,13 @@ Covariance6d bodyPoseCovariance(const Covariance6d& camera_covariance_W, const E
   return A * camera_covariance_W * A.transpose();
 }
 
+Covariance6d rotatedCovariance(const Covariance6d& camera_covariance, const Eigen::Matrix3d& R_to_from) {
+  Covariance6d A = Covariance6d::Zero();
+  A.block<3, 3>(0, 0) = R_to_from;
+  A.block<3, 3>(3, 3) = R_to_from;
+  return A * camera_covariance * A.transpose();
+}
+
 Covariance6d grownCovariance(const Covariance6d& covariance, double elapsed_s) {
   const double t = std::max(elapsed_s, 0.0);
   Covariance6d grown = covariance;

@@ -170,11 +170,6 @@ void readParameters(const ros::NodeHandle& pnh, st::Settings* settings, NodeOpti
   errors.require(
       options->tum_camera.empty() || !options->intrinsics_from_parameters,
       "~tum_camera (" + options->tum_camera + ") and FocalLength/CenterPoint both give the intrinsics: set one");
-  // The map publisher and the services read one map; submaps come to the node with loop closure.
-  errors.require(!settings->pipeline.submaps.enabled(),
-                 "~SubmapSize=" + st::toText(settings->pipeline.submaps.max_distance_m) +
-                     ": the node does not publish or save a map of submaps yet (sdf_tracker_offline does); set it "
-                     "to 0");
   if (errors.list().empty()) errors.merge("", settings->validate());
   st::throwIfInvalid("parameters of " + pnh.getNamespace(), errors.list());
   std::vector<std::string> names;

@@ -127,6 +127,23 @@ void PoseBroadcaster::clearPath() {
   odometry_.restart();
 }
 
+void PoseBroadcaster::republishPath(const std::vector<sdf_tracker::io::StampedPose>& path_W) {
+  const Eigen::Isometry3d T_map_W = this->T_map_W();
+  path_poses_.clear();
+  const size_t first = path_W.size() > static_cast<size_t>(path_length_) ? path_W.size() - path_length_ : 0;
+  for (size_t k = first; k < path_W.size(); ++k) {
+    geometry_msgs::PoseStamped pose;
+    pose.header.stamp = ros::Time(path_W[k].timestamp_s);
+    pose.header.frame_id = frames_.map_frame;
+    pose.pose = toPoseMsg(T_map_W * path_W[k].T_W_C);
+    path_poses_.push_back(pose);
+  }
+  if (path_poses_.empty()) return;
+  path_.header.stamp = path_poses_.back().header.stamp;
+  path_.poses.assign(path_poses_.begin(), path_poses_.end());
+  path_pub_.publish(path_);  // latched: a later subscriber gets it too
+}
+
 bool PoseBroadcaster::mayPublishParentOf(const std::string& child, const std::string& parent) {
   if (refused_children_.count(child)) return false;
   std::string existing;

@@ -88,7 +88,15 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
   const PoseBroadcaster* poses = poses_.get();
   services_ = std::make_unique<MapServices>(pnh_, state_, options_, *poses_);
   map_publisher_ = std::make_unique<MapPublisher>(
-      pnh_, state_.mutex, [this]() -> const st::TsdfMap* { return &state_.pipeline->map(); },
+      pnh_, state_.mutex,
+      [this] {
+        // The submaps, oldest first, each where the pose graph places it; the active one last.
+        const st::SdfPipeline& pipeline = *state_.pipeline;
+        std::vector<LiveMapPart> parts;
+        for (const st::Submap& submap : pipeline.closedSubmaps()) parts.push_back({submap.map.get(), submap.place.T_map_W});
+        parts.push_back({&pipeline.map(), pipeline.submapPlace(static_cast<int>(pipeline.submapCount()) - 1).T_map_W});
+        return parts;
+      },
       [poses] { return poses->T_map_W(); },
       [this] {
         std::lock_guard<std::mutex> lock(state_.mutex);
@@ -103,7 +111,8 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
       !f.base_frame.empty() ? f.base_frame : f.camera_frame.empty() ? "<image frame>" : f.camera_frame;
   diagnostics_ = std::make_unique<NodeDiagnostics>(nh_, pnh_, nh_.resolveName(depth_topic),
                                                    f.odom_frame.empty() ? "" : f.odom_frame + " -> " + base,
-                                                   settings.pipeline.fuse_colour ? colour_topic_ : "");
+                                                   settings.pipeline.fuse_colour ? colour_topic_ : "",
+                                                   settings.pipeline.loops.enabled);
 
   // Start the reconfigure server from our values, not the cfg file's defaults. Its first call
   // comes now, and may subscribe to colour: everything a colour image reaches exists by then.
@@ -347,8 +356,11 @@ void TrackerServer::process(const Frame& frame) {
   const std::optional<Eigen::Isometry3d> T_odom_C = poses_->odometryCameraPose(image.header.stamp, image.header.frame_id);
   if (!options_.frames.odom_frame.empty()) diagnostics_->odometryLookedUp(poses_->odometryProblem());
   st::FrameReport report;
-  Eigen::Isometry3d T_W_C;
+  // The camera in the tracker's world where the pose graph places it (what goes out), and in the
+  // active submap's frame (what its map is read at).
+  Eigen::Isometry3d T_W_C, T_active_C;
   bool pose_known = true;
+  std::vector<st::io::StampedPose> moved_path_W;  ///< the path as a pose graph solution placed it anew
   {
     std::lock_guard<std::mutex> lock(state_.mutex);
     if (state_.restarted) {
@@ -363,7 +375,7 @@ void TrackerServer::process(const Frame& frame) {
                  "restarting the map", back_s, last_stamp_.toSec(), image.header.stamp.toSec(),
                  options_.time_jump_reset_s);
         state_.pipeline->reset();
-        state_.trajectory.clear();
+        state_.path.clear();
         poses_->clearPath();
       } else {
         // One stray stamp (0, a clock jump) must not wipe the map: the frame is dropped.
@@ -399,9 +411,18 @@ void TrackerServer::process(const Frame& frame) {
     }
     if (report.fused) diagnostics_->frameColoured(report.coloured, colour_problem_);
     colour_problem_.clear();
-    T_W_C = state_.pipeline->pose();
+    T_active_C = state_.pipeline->pose();
+    T_W_C = state_.pipeline->mapPose();
     pose_known = state_.pipeline->poseKnown();
     status.consecutive_failures = static_cast<uint32_t>(state_.pipeline->consecutiveFailures());
+    if (report.reset) state_.path.detachFromSubmaps();
+    if (pose_known && report.track.tracked()) {
+      state_.path.add(image.header.stamp.toSec(), report.submap, T_active_C, T_W_C);
+    }
+    status.submap = static_cast<uint32_t>(report.submap);
+    status.loops_closed = static_cast<uint32_t>(state_.pipeline->loopsClosed());
+    status.loops_rejected = static_cast<uint32_t>(state_.pipeline->loopsRejected());
+    if (report.loop.solved) moved_path_W = state_.path.placed(*state_.pipeline);
   }
 
   const st::TrackResult& t = report.track;
@@ -463,20 +484,34 @@ void TrackerServer::process(const Frame& frame) {
   // place is confirmed (the status says how the search goes). A held pose (the frame failed) goes
   // on tf and ~odom, whose covariance says how little it is worth; ~pose, ~path and the
   // trajectory carry estimates only.
+  // A pose graph solution that landed moves the camera from this frame on (map -> base, or
+  // map -> odom on a robot) and the path behind it.
+  const st::LoopReport& loop = report.loop;
+  if (loop.found) {
+    ROS_INFO("sdf_tracker: loop found: the view is in submap %d (the active one is %d); solving the pose graph",
+             loop.submap, report.submap);
+  }
+  if (loop.solved) {
+    status.loop_solved = true;
+    status.loop_correction_m = loop.correction_m;
+    status.loop_correction_deg = loop.correction_deg;
+    ROS_INFO("sdf_tracker: pose graph solved in %.1f ms: %d loop(s) kept, %d found wrong and left out; the camera "
+             "moved %.3f m, %.2f deg; ~path republished",
+             loop.optimise_ms, loop.closed, loop.rejected, loop.correction_m, loop.correction_deg);
+    poses_->republishPath(moved_path_W);
+  }
   if (pose_known) {
-    const Eigen::Isometry3d T_map_C = poses_->publish(
-        image.header.stamp, image.header.frame_id, T_W_C,
-        t.tracked() ? std::optional<Covariance6d>(t.covariance) : std::nullopt, T_odom_C);
-    if (t.tracked()) {
-      std::lock_guard<std::mutex> lock(state_.mutex);
-      state_.trajectory.push_back({image.header.stamp.toSec(), T_map_C});
-    }
+    // The tracker's covariance is in the active submap's frame; the estimate in the world's.
+    const Eigen::Matrix3d R_W_active = T_W_C.linear() * T_active_C.linear().transpose();
+    poses_->publish(image.header.stamp, image.header.frame_id, T_W_C,
+                    t.tracked() ? std::optional<Covariance6d>(rotatedCovariance(t.covariance, R_W_active)) : std::nullopt,
+                    T_odom_C);
   }
   publishStatus(status);
 
   if (pose_known && denoised_pub_.getNumSubscribers() > 0) {
     std::lock_guard<std::mutex> lock(state_.mutex);
-    const st::RaycastImage cast = st::raycast(state_.pipeline->map(), camera, T_W_C,
+    const st::RaycastImage cast = st::raycast(state_.pipeline->map(), camera, T_active_C,
                                               state_.pipeline->config().raycast, &depth);
     denoised_pub_.publish(toImageMsg(cast.depth, image.header));
   }
@@ -508,7 +543,7 @@ void TrackerServer::applyPoseRequest(const geometry_msgs::PoseWithCovarianceStam
       ROS_WARN("sdf_tracker: the pose on %s has no frame_id: taken in ~map_frame '%s'", topic.c_str(),
                poses_->mapFrame().c_str());
     }
-    const Eigen::Isometry3d T_W_C = poses_->requestedCameraPose(request, image_frame, state_.pipeline->pose());
+    const Eigen::Isometry3d T_W_C = poses_->requestedCameraPose(request, image_frame, state_.pipeline->mapPose());
     state_.pipeline->relocalise(T_W_C);  // throws, naming Relocalise, when it is off
     const Eigen::Vector3d t_map = poses_->T_map_W() * T_W_C.translation();
     ROS_INFO_THROTTLE(1.0,

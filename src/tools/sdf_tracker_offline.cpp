@@ -32,6 +32,7 @@
 #include "sdf_tracker/map/sparse_tsdf_map.h"
 #include "sdf_tracker/pipeline/parameters.h"
 #include "sdf_tracker/pipeline/pipeline.h"
+#include "sdf_tracker/pipeline/tracked_path.h"
 #include "sdf_tracker/surface/raycaster.h"
 #include "sdf_tracker/surface/surface.h"
 #include "sdf_tracker/util/frame_memory.h"
@@ -256,10 +257,7 @@ int run(int argc, char** argv) {
   std::ostringstream frames_csv;
   frames_csv << "timestamp,status,iterations,rms_residual_m,valid_points,overlap,inverse_condition,constrained_rank,"
                 "tracking_ms,fusion_ms,fused,map_mb,message\n";
-  // As published at each frame (in the map frame as the pose graph had it then), and each pose in
-  // its submap's frame, which the final graph places (-1: in a map cleared since).
-  std::vector<st::io::StampedPose> trajectory;
-  std::vector<std::pair<int, Eigen::Isometry3d>> poses_in_submaps;
+  st::TrackedPath path;
   std::vector<double> anchor_stamps;  // of the frame that started each submap, for loops.csv
   std::vector<double> loop_search_ms, optimise_ms;  // frames that searched for a loop; graph solves
   std::vector<double> frame_ms, tracking_ms, fusion_ms, raycast_ms;
@@ -332,14 +330,13 @@ int run(int argc, char** argv) {
     // Estimates only (a held pose is none; frames.csv lists every frame): with --fuse-ground-truth,
     // where the tracker took the frame, not the fused pose.
     if (report.reset) {
-      for (auto& pose : poses_in_submaps) pose.first = -1;
+      path.detachFromSubmaps();
     }
     if (report.initialised_map) anchor_stamps.clear();
     if (report.initialised_map || report.started_submap) anchor_stamps.push_back(sequence.timestamp(i));
     if (t.tracked()) {
       const Eigen::Isometry3d T_W_C = true_T_W_C.empty() ? pipeline.pose() : t.T_W_C;
-      trajectory.push_back({sequence.timestamp(i), pipeline.submapPlace(report.submap).T_map_W * T_W_C});
-      poses_in_submaps.emplace_back(report.submap, T_W_C);
+      path.add(sequence.timestamp(i), report.submap, T_W_C, pipeline.submapPlace(report.submap).T_map_W * T_W_C);
     }
     if (report.loop.searched) loop_search_ms.push_back(report.loop.search_ms);
     if (report.loop.found && !args.has("quiet")) {
@@ -399,7 +396,7 @@ int run(int argc, char** argv) {
     // once the last solve has landed.
     const st::LoopReport last = pipeline.finishLoopClosure();
     if (last.solved) optimise_ms.push_back(last.optimise_ms);
-    st::io::writeTrajectory(output.path("trajectory_online.txt"), trajectory);
+    st::io::writeTrajectory(output.path("trajectory_online.txt"), path.published());
     // Each loop as the submaps' anchors it joins (the frames that started them), to hold against
     // a ground truth.
     std::ostringstream loops_csv;
@@ -416,11 +413,8 @@ int run(int argc, char** argv) {
                 << ',' << q.z() << ',' << q.w() << ',' << (loop.kept ? 1 : 0) << '\n';
     }
     st::io::writeTextFile(output.path("loops.csv"), loops_csv.str());
-    for (size_t k = 0; k < trajectory.size(); ++k) {
-      const auto& [submap, T_W_C] = poses_in_submaps[k];
-      if (submap >= 0) trajectory[k].T_W_C = pipeline.submapPlace(submap).T_map_W * T_W_C;
-    }
   }
+  const std::vector<st::io::StampedPose> trajectory = path.placed(pipeline);
   st::io::writeTrajectory(output.path("trajectory.txt"), trajectory);
   st::io::writeTextFile(output.path("frames.csv"), frames_csv.str());
   pipeline.withWholeMap([&](const st::TsdfMap& map) {  // swapped blocks included

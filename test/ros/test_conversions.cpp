@@ -379,6 +379,20 @@ TEST(Odometry, TheTrackersCovarianceBecomesTheBodysInRosOrderAlongTheMapAxes) {
   EXPECT_NEAR(in_map(5, 5), 2e-4, 1e-15) << "yaw is about the optical -y";
 }
 
+TEST(Odometry, ACovarianceInASubmapsFrameTurnsWithTheFrameThePoseGraphGivesIt) {
+  // [rotation; translation], each along the submap's axes; the graph turned it 90 degrees about z.
+  Covariance6d camera = Covariance6d::Zero();
+  camera.diagonal() << 1e-4, 2e-4, 3e-4, 4e-6, 5e-6, 6e-6;
+  camera(3, 4) = camera(4, 3) = 1e-6;
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.5 * M_PI, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Covariance6d turned = rotatedCovariance(camera, R);
+  Eigen::Matrix<double, 6, 1> expected;
+  expected << 2e-4, 1e-4, 3e-4, 5e-6, 4e-6, 6e-6;  // x and y swap places in both blocks
+  EXPECT_TRUE(turned.diagonal().isApprox(expected)) << turned.diagonal().transpose();
+  EXPECT_NEAR(turned(3, 4), -1e-6, 1e-15) << "x'y' = -yx";
+  EXPECT_TRUE(rotatedCovariance(camera, Eigen::Matrix3d::Identity()).isApprox(camera));
+}
+
 TEST(Odometry, TwistFromSuccessivePosesAndAHeldPoseGrowsItsCovariance) {
   OdometryBuilder builder("map");
   Covariance6d tracked = 1e-6 * Covariance6d::Identity();

@@ -12,6 +12,7 @@
 #include "sdf_tracker/pipeline/loop_closure.h"
 #include "sdf_tracker/pipeline/parameters.h"
 #include "sdf_tracker/pipeline/pipeline.h"
+#include "sdf_tracker/pipeline/tracked_path.h"
 #include "sdf_tracker/sim/synthetic.h"
 #include "sdf_tracker/util/se3.h"
 #include "test_helpers.h"
@@ -148,6 +149,29 @@ TEST(LoopClosure, ACameraBackWhereItStartedClosesALoopThatUndoesTheDrift) {
   EXPECT_LT(published_back_m, 0.25 * drift_back_m) << "the loops did not undo the drift as the camera came back";
   EXPECT_LT(optimised_back_m, 0.25 * drift_back_m) << "the graph did not undo the drift";
   EXPECT_LT(end_m, 0.5 * drift_end_m) << "the loops did not hold the path after the return";
+}
+
+TEST(LoopClosure, ATrackedPathIsPlacedWhereTheGraphNowPutsEachPosesSubmap) {
+  const SdfPipeline& pipeline = *circle().pipeline;
+  const CircleRun& run = circle().run;
+  TrackedPath path;
+  for (size_t i = 0; i < run.in_submaps.size(); ++i) {
+    path.add(i * kFramePeriod_s, run.in_submaps[i].first, run.in_submaps[i].second, run.published[i]);
+  }
+  const std::vector<StampedPose> placed = path.placed(pipeline);
+  ASSERT_EQ(placed.size(), run.in_submaps.size());
+  double moved_m = 0.0;
+  for (size_t i = 0; i < placed.size(); ++i) {
+    const auto& [submap, T_W_C] = run.in_submaps[i];
+    EXPECT_TRUE(placed[i].T_W_C.isApprox(pipeline.submapPlace(submap).T_map_W * T_W_C)) << "frame " << i;
+    EXPECT_TRUE(path.published()[i].T_W_C.isApprox(run.published[i])) << "frame " << i;
+    moved_m = std::max(moved_m, positionError(placed[i].T_W_C, run.published[i]));
+  }
+  EXPECT_GT(moved_m, 0.05) << "the loops moved no pose: the test shows nothing";
+  // After a reset no graph places the poses so far: they stay where they were published.
+  path.detachFromSubmaps();
+  const std::vector<StampedPose> detached = path.placed(pipeline);
+  for (size_t i = 0; i < detached.size(); ++i) EXPECT_TRUE(detached[i].T_W_C.isApprox(run.published[i]));
 }
 
 TEST(LoopClosure, EveryLoopClosedAgreesWithTheTruth) {

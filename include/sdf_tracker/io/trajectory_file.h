@@ -3,15 +3,11 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
+#include "sdf_tracker/util/stamped_pose.h"
 
 namespace sdf_tracker::io {
 
-/// A timestamped camera-to-world pose.
-struct StampedPose {
-  double timestamp_s;
-  Eigen::Isometry3d T_W_C;
-};
+using sdf_tracker::StampedPose;
 
 /// TUM trajectory format: "timestamp tx ty tz qx qy qz qw" per line, '#' comments.
 void writeTrajectory(const std::string& path, const std::vector<StampedPose>& poses);

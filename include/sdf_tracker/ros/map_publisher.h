@@ -7,10 +7,12 @@
 #include <mutex>
 #include <thread>
 #include <unordered_map>
+#include <vector>
 
 #include <Eigen/Geometry>
 #include <ros/ros.h>
 #include <std_msgs/Header.h>
+#include <visualization_msgs/MarkerArray.h>
 
 #include "sdf_tracker/map/tsdf_map.h"
 #include "sdf_tracker/surface/chunked_mesh.h"
@@ -43,14 +45,26 @@ class MapSnapshot {
   uint64_t synced_revision_ = 0;  ///< sparse: the live map's revision the copy holds
 };
 
+/// One part of the live map: a submap (the whole map when there are none), and where the pose
+/// graph places its frame in the tracker's world.
+struct LiveMapPart {
+  const sdf_tracker::TsdfMap* map = nullptr;
+  Eigen::Isometry3d T_W_part = Eigen::Isometry3d::Identity();
+};
+
 /// Publishes the map as ~cloud, ~mesh and ~mesh_blocks from a snapshot on its own low-priority
 /// thread, each at its rate and only while someone subscribes: map extraction never blocks
 /// tracking and takes only what CPU the tracker leaves. ~mesh_blocks sends a sparse map's mesh in
 /// chunks, only those that changed (everything again to a new subscriber); a dense grid's as one.
+/// A map of submaps: ~cloud and ~mesh show them merged where the pose graph places them (one
+/// surface where two overlap); ~mesh_blocks sends each submap's chunks at its place, and when a
+/// solution of the graph moves a submap, its chunks again at the new place, not meshed again.
 class MapPublisher {
  public:
+  /// `live` gives the map's parts (SdfPipeline's submaps, oldest first, the active one last; one
+  /// part without submaps), read only while `map_mutex` is held; none when there is no map.
   /// `T_map_W` gives the map frame's pose in the tracker's world, `stamp` the latest frame's stamp.
-  MapPublisher(ros::NodeHandle pnh, std::mutex& map_mutex, std::function<const sdf_tracker::TsdfMap*()> live,
+  MapPublisher(ros::NodeHandle pnh, std::mutex& map_mutex, std::function<std::vector<LiveMapPart>()> live,
                std::function<Eigen::Isometry3d()> T_map_W, std::function<ros::Time()> stamp, std::string map_frame,
                double cloud_rate_hz, double mesh_rate_hz);
   ~MapPublisher();
@@ -61,13 +75,50 @@ class MapPublisher {
   void setColour(bool colour_on) { colour_ = colour_on; }
 
  private:
+  /// A part of the map as the publisher holds it: its snapshot, and its chunks as last sent.
+  struct Part {
+    std::unique_ptr<MapSnapshot> snapshot;
+    const sdf_tracker::TsdfMap* copy = nullptr;  ///< the snapshot's, as of the last update
+    Eigen::Isometry3d T_W_part = Eigen::Isometry3d::Identity();
+    sdf_tracker::ChunkedMesher mesher;
+    /// Chunk key -> marker id and mesh, of the chunks shown: a part moved is sent again from them.
+    std::unordered_map<uint64_t, std::pair<int, sdf_tracker::TriangleMesh>> chunks;
+    Eigen::Isometry3d shown_T_map_part = Eigen::Isometry3d::Identity();  ///< where they were sent
+    bool held_colour = false;  ///< the part held colour at the last ~mesh_blocks update
+    bool meshed = false;       ///< it was on ~mesh_blocks before
+  };
+
   void run();
-  /// ~mesh_blocks: the chunks that changed since the last call (all after a restart).
-  void publishMeshBlocks(const sdf_tracker::TsdfMap& map, const std_msgs::Header& header,
-                         const Eigen::Isometry3d& T_map_W);
+  /// Brings the parts up to date with the live map (parts it no longer has are dropped, and the
+  /// next ~mesh_blocks message starts over); false when there is no map.
+  bool updateParts();
+  /// The whole map in the tracker's world: the one part, or the parts merged where they lie.
+  const sdf_tracker::TsdfMap& wholeMap();
+  /// ~mesh_blocks: the chunks that changed since the last call (all after a restart), and every
+  /// chunk of a part that moved.
+  void publishMeshBlocks(const std_msgs::Header& header, const Eigen::Isometry3d& T_map_W);
+  /// A chunk's marker on ~mesh_blocks (a deletion for an empty mesh).
+  static visualization_msgs::Marker chunkMarker(const sdf_tracker::TriangleMesh& mesh, int id,
+                                                const std_msgs::Header& header, const Eigen::Isometry3d& T_map_part);
 
   ros::Publisher cloud_pub_, mesh_pub_, mesh_blocks_pub_;
-  MapSnapshot snapshot_;
+  std::mutex& map_mutex_;
+  std::function<std::vector<LiveMapPart>()> live_;
+  std::vector<Part> parts_;
+  std::unique_ptr<sdf_tracker::TsdfMap> merged_;  ///< wholeMap() of several parts
+  /// What the parts before the active one were when they were last merged into closed_merged_.
+  struct ClosedPartState {
+    uint64_t identity;
+    uint64_t revision;
+    Eigen::Matrix4d T_W_part;
+    bool operator==(const ClosedPartState& o) const {
+      return identity == o.identity && revision == o.revision && T_W_part == o.T_W_part;
+    }
+    bool operator!=(const ClosedPartState& o) const { return !(*this == o); }
+  };
+  std::vector<ClosedPartState> closed_merged_state_;
+  std::unique_ptr<sdf_tracker::SparseTsdfMap> closed_merged_;
+  bool start_over_ = false;  ///< parts were dropped: the next ~mesh_blocks message starts over
   std::function<Eigen::Isometry3d()> T_map_W_;
   std::function<ros::Time()> stamp_;
   std::string map_frame_;
@@ -77,10 +128,8 @@ class MapPublisher {
   bool stopping_ = false;
   std::atomic<bool> resend_mesh_blocks_{true};  ///< a new subscriber needs every chunk
   std::atomic<bool> colour_{false};
-  sdf_tracker::ChunkedMesher mesher_;
-  std::unordered_map<uint64_t, int> chunk_marker_ids_;  ///< chunk key -> marker id
-  Eigen::Isometry3d mesh_blocks_T_map_W_ = Eigen::Isometry3d::Identity();
-  bool mesh_blocks_held_colour_ = false;  ///< the map held colour at the last ~mesh_blocks update
+  bool dense_shown_ = false;  ///< ~mesh_blocks holds a dense grid's one marker (id 0)
+  int next_marker_id_ = 1;    ///< of a chunk; 0 is the dense grid's
   std::thread thread_;
 };
 

@@ -12,6 +12,7 @@
 
 #include "sdf_tracker/SavePath.h"
 #include "sdf_tracker/SaveRegion.h"
+#include "sdf_tracker/io/trajectory_file.h"
 #include "sdf_tracker/ros/parameters.h"
 #include "sdf_tracker/ros/pose_broadcaster.h"
 #include "sdf_tracker/ros/tracker_state.h"
@@ -45,9 +46,9 @@ class MapServices {
   /// Runs a service's action; its text (or the exception's) becomes the response's message.
   template <typename Response>
   static bool answer(Response& res, const std::function<std::string()>& action);
-  /// A copy of the map and the trajectory so far, taken under the lock.
-  /// A copy of the whole map, and (when asked) of the trajectory and the place memory, taken
-  /// under the lock.
+  /// A copy of the whole map (the submaps merged where the pose graph places them), and when asked
+  /// of the trajectory so far (in ~map_frame, each pose where the graph places it now) and the
+  /// place memory, taken under the lock.
   std::unique_ptr<sdf_tracker::TsdfMap> copyMap(std::vector<sdf_tracker::io::StampedPose>* trajectory,
                                                 sdf_tracker::PlaceMemory* places = nullptr);
   void writeTrajectory(const std::vector<sdf_tracker::io::StampedPose>& trajectory) const;

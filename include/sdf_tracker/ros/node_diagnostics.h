@@ -2,6 +2,7 @@
 
 #include <deque>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include <diagnostic_updater/diagnostic_updater.h>
@@ -25,6 +26,9 @@ namespace sdf_tracker_ros {
 /// - "<node>: colour", with Colour on at start: OK while frames are fused in colour, and for a
 ///   camera that sends no colour images (the map is then made without); WARN when colour images
 ///   come but cannot be used (the depth is not registered to them, a wrong encoding or size).
+/// - "<node>: loop closure", with LoopClosure on at start: the active submap, loops kept, and
+///   how far the last pose graph solution moved the camera and when; OK, WARN once the graph has
+///   found a loop wrong and left it out (a place match that was not what it seemed).
 class NodeDiagnostics {
  public:
   static constexpr double kStaleAfter_s = 3.0;
@@ -34,7 +38,8 @@ class NodeDiagnostics {
   /// `hardware_id`: the depth topic the node listens on. `odometry_transform`: the robot's
   /// odometry the node reads ("odom -> base_link"), or empty for none (no odometry task).
   NodeDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& hardware_id,
-                  const std::string& odometry_transform = "", const std::string& colour_topic = "");
+                  const std::string& odometry_transform = "", const std::string& colour_topic = "",
+                  bool loop_closure = false);
 
   /// A frame's ~status, and the seconds from its image's stamp to its outputs. Frame thread.
   void frameProcessed(const sdf_tracker::TrackingStatus& status, double latency_s);
@@ -52,6 +57,7 @@ class NodeDiagnostics {
   void tracking(diagnostic_updater::DiagnosticStatusWrapper& stat);
   void odometry(diagnostic_updater::DiagnosticStatusWrapper& stat);
   void colour(diagnostic_updater::DiagnosticStatusWrapper& stat);
+  void loopClosure(diagnostic_updater::DiagnosticStatusWrapper& stat);
   /// Forgets the processed frames older than the rate window.
   void trim(const ros::WallTime& now);
 
@@ -74,6 +80,9 @@ class NodeDiagnostics {
   std::string colour_topic_;
   std::string colour_problem_;  ///< the last colour image's or frame's
   uint32_t colour_images_ = 0, frames_coloured_ = 0, frames_uncoloured_ = 0;
+  /// The last frame with which a pose graph solution landed (loop_solved), and when.
+  std::optional<sdf_tracker::TrackingStatus> last_solution_;
+  ros::WallTime last_solution_wall_;
 };
 
 }  // namespace sdf_tracker_ros

@@ -32,6 +32,10 @@ constexpr double kMaxTwistInterval_s = 0.5;
 Covariance6d bodyPoseCovariance(const Covariance6d& camera_covariance_W, const Eigen::Matrix3d& R_map_W,
                                 const Eigen::Vector3d& camera_to_body_map);
 
+/// The tracker's covariance of the camera pose (as above, about the camera centre) along the axes
+/// of another world: `R_to_from` turns the axes it is given in into the new ones.
+Covariance6d rotatedCovariance(const Covariance6d& camera_covariance, const Eigen::Matrix3d& R_to_from);
+
 /// A covariance (ROS order) after `elapsed_s` without a measurement: kHeldSpeed_mps and
 /// kHeldTurnRate_radps of standard deviation added per second.
 Covariance6d grownCovariance(const Covariance6d& covariance, double elapsed_s);

@@ -5,6 +5,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <vector>
 
 #include <Eigen/Geometry>
 #include <geometry_msgs/PoseStamped.h>
@@ -16,6 +17,7 @@
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
+#include "sdf_tracker/io/trajectory_file.h"
 #include "sdf_tracker/ros/odometry.h"
 #include "sdf_tracker/ros/parameters.h"
 
@@ -112,6 +114,9 @@ class PoseBroadcaster {
   void restoreMapFrame(const Eigen::Isometry3d& T_map_W);
   /// Forgets the path (after ~reset or a loaded map).
   void clearPath();
+  /// The path placed anew (a pose graph solution moved it): its last ~path_length poses replace
+  /// ~path. `path_W`: the camera's poses T_W_C in the tracker's world, oldest first.
+  void republishPath(const std::vector<sdf_tracker::io::StampedPose>& path_W);
 
  private:
   /// False when `child` already has a parent other than `parent` from another publisher (said

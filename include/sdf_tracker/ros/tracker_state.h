@@ -6,8 +6,8 @@
 
 #include <ros/time.h>
 
-#include "sdf_tracker/io/trajectory_file.h"
 #include "sdf_tracker/pipeline/pipeline.h"
+#include "sdf_tracker/pipeline/tracked_path.h"
 
 namespace sdf_tracker_ros {
 
@@ -17,8 +17,9 @@ struct TrackerState {
   std::mutex mutex;
   /// The only copy of the tracker's configuration is the pipeline's own (config()).
   std::unique_ptr<sdf_tracker::SdfPipeline> pipeline;
-  /// The camera's pose in the map frame at every tracked frame (the trajectory file).
-  std::vector<sdf_tracker::io::StampedPose> trajectory;
+  /// The camera's pose at every tracked frame, in the tracker's world (the pose graph's map frame:
+  /// PoseBroadcaster::T_map_W() places it in ~map_frame): the trajectory file, ~path.
+  sdf_tracker::TrackedPath path;
   ros::Time last_stamp;  ///< of the last processed frame
   /// The map was reset or replaced: the frame thread restarts its path and time checks.
   bool restarted = false;
