@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <Eigen/Eigenvalues>
+
 #include "sdf_tracker/util/se3.h"
 #include "sdf_tracker/util/validation.h"
 
@@ -46,8 +48,28 @@ PoseInformation odometryEdgeInformation(const LoopClosureConfig& config, const E
                              (config.odometry_floor_deg + config.odometry_drift_deg_per_m * distance_m) * kRadPerDeg);
 }
 
-PoseInformation loopEdgeInformation(const LoopClosureConfig& config) {
-  return diagonalInformation(config.loop_sigma_m, config.loop_sigma_deg * kRadPerDeg);
+PoseInformation loopEdgeInformation(const LoopClosureConfig& config, const Eigen::Isometry3d& T_S_C,
+                                    const Eigen::Matrix<double, 6, 6>& fit_covariance_S,
+                                    const Eigen::Isometry3d& T_S_to) {
+  // A small motion xi = [w; v] of the camera about its centre c (along S's axes) moves the `to`
+  // node, at (R, t) in S, by R^T w (rotation) and R^T (v + w x (t - c)) (translation), in its own
+  // frame: the edge's error, translation first.
+  const Eigen::Matrix3d Rt = T_S_to.linear().transpose();
+  const Eigen::Vector3d lever = T_S_to.translation() - T_S_C.translation();
+  Eigen::Matrix<double, 6, 6> J = Eigen::Matrix<double, 6, 6>::Zero();
+  J.block<3, 3>(0, 0) = -Rt * skew(lever);
+  J.block<3, 3>(0, 3) = Rt;
+  J.block<3, 3>(3, 0) = Rt;
+  Eigen::Matrix<double, 6, 6> covariance = J * fit_covariance_S * J.transpose();
+  const double sigma_rad = config.loop_sigma_deg * kRadPerDeg;
+  covariance.diagonal() += (Eigen::Matrix<double, 6, 1>() << Eigen::Vector3d::Constant(config.loop_sigma_m * config.loop_sigma_m),
+                            Eigen::Vector3d::Constant(sigma_rad * sigma_rad)).finished();
+  // Inverted through its eigen decomposition: along an unconstrained direction the variance is
+  // kUnconstrainedVariance and the information next to zero, without a near-singular solve.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(0.5 * (covariance + covariance.transpose()));
+  const PoseInformation information =
+      eigen.eigenvectors() * eigen.eigenvalues().cwiseInverse().asDiagonal() * eigen.eigenvectors().transpose();
+  return 0.5 * (information + information.transpose());
 }
 
 LoopDetector::LoopDetector(const LoopClosureConfig& config, const RelocaliserConfig& relocaliser,
@@ -132,7 +154,7 @@ LoopDetector::Step LoopDetector::step(const DepthImage& depth, const PinholeCame
   const bool plausible = offset.translation().norm() <= config_.search_radius_m &&
                          rotationAngle(offset) <= config_.search_angle_deg * kRadPerDeg;
   if (accepted && plausible) {
-    result.match = LoopMatch{search_submap_, found.T_W_C};
+    result.match = LoopMatch{search_submap_, found.T_W_C, found.track.covariance};
   } else if (accepted || search_frames_ >= config_.max_search_frames ||
              found.outcome == Relocaliser::Outcome::kAmbiguous) {
     result.message = accepted ? "found further from where the graph puts it than search_radius_m"

@@ -396,8 +396,10 @@ void SdfPipeline::startSubmap(bool after_search) {
              (b.place.T_map_anchor().translation() - T_W_C_.translation()).norm();
     });
     graph_.addNode(active_.T_map_anchor());
+    // (The search's covariance is not kept: the loop's own sigma alone.)
     graph_.addEdge(PoseEdge{nearest->place.node, active_.node, nearest->place.T_map_anchor().inverse() * T_W_C_,
-                            loopEdgeInformation(config_.loops), PoseEdgeKind::kLoop});
+                            loopEdgeInformation(config_.loops, T_W_C_, Eigen::Matrix<double, 6, 6>::Zero(), T_W_C_),
+                            PoseEdgeKind::kLoop});
   } else {
     // The tracker goes on in the same frame: the odometry between the two anchors.
     active_.T_map_W = closed.T_map_W;
@@ -467,10 +469,12 @@ void SdfPipeline::closeLoops(const DepthImage& filtered, const PinholeCamera& ca
   if (!step.match) return;
   // Where the active submap's anchor is in the old one's, by the camera seen from both.
   const SubmapPlace& old = closed_submaps_[step.match->submap].place;
-  const Eigen::Isometry3d T_old_active =
-      old.T_W_anchor.inverse() * step.match->T_S_C * T_W_C_.inverse() * active_.T_W_anchor;
+  const Eigen::Isometry3d T_S_active = step.match->T_S_C * T_W_C_.inverse() * active_.T_W_anchor;
+  const Eigen::Isometry3d T_old_active = old.T_W_anchor.inverse() * T_S_active;
   loop_edges_.push_back(graph_.edges().size());
-  graph_.addEdge(PoseEdge{old.node, active_.node, T_old_active, loopEdgeInformation(config_.loops), PoseEdgeKind::kLoop});
+  graph_.addEdge(PoseEdge{old.node, active_.node, T_old_active,
+                          loopEdgeInformation(config_.loops, step.match->T_S_C, step.match->covariance_S, T_S_active),
+                          PoseEdgeKind::kLoop});
   loop_detector_->joined(old.node);
   graph_solver_->solve(graph_);
   r.found = true;

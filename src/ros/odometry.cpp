@@ -4,18 +4,11 @@
 
 #include "sdf_tracker/ros/conversions.h"
 #include "sdf_tracker/tracking/tracker.h"
+#include "sdf_tracker/util/se3.h"
 
 namespace sdf_tracker_ros {
 
 namespace {
-
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d m;
-  m << 0, -v.z(), v.y(),  //
-      v.z(), 0, -v.x(),   //
-      -v.y(), v.x(), 0;
-  return m;
-}
 
 template <size_t N>
 void toRowMajor(const Covariance6d& covariance, boost::array<double, N>* out) {
@@ -32,7 +25,7 @@ Covariance6d bodyPoseCovariance(const Covariance6d& camera_covariance_W, const E
   // A small motion [w; v] about the camera centre (world axes) turns the body by R w and moves its
   // origin by R v + (R w) x r = R v - [r]x R w, with r the lever from the camera to the body.
   Covariance6d A = Covariance6d::Zero();
-  A.block<3, 3>(0, 0) = -skew(camera_to_body_map) * R_map_W;
+  A.block<3, 3>(0, 0) = -sdf_tracker::skew(camera_to_body_map) * R_map_W;
   A.block<3, 3>(0, 3) = R_map_W;
   A.block<3, 3>(3, 0) = R_map_W;
   return A * camera_covariance_W * A.transpose();

@@ -5,12 +5,13 @@
 
 namespace sdf_tracker {
 
-namespace {
 Eigen::Matrix3d skew(const Eigen::Vector3d& w) {
   Eigen::Matrix3d s;
   s << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
   return s;
 }
+
+namespace {
 
 /// The coefficients of R = I + a W + b W^2 and V = I + b W + c W^2 for W = [omega]x, |omega| = theta.
 struct RodriguesCoefficients {

@@ -14,6 +14,7 @@
 #include "sdf_tracker/pipeline/pipeline.h"
 #include "sdf_tracker/pipeline/tracked_path.h"
 #include "sdf_tracker/sim/synthetic.h"
+#include "sdf_tracker/tracking/tracker.h"
 #include "sdf_tracker/util/se3.h"
 #include "test_helpers.h"
 
@@ -38,9 +39,49 @@ TEST(LoopClosure, OdometryIsTrustedLessTheFurtherItGoesAndALoopByItsFit) {
   const PoseInformation still = odometryEdgeInformation(config, Eigen::Isometry3d::Identity());
   EXPECT_NEAR(still(0, 0), 1.0 / (config.odometry_floor_m * config.odometry_floor_m), 1e-6);
   EXPECT_GT(still(0, 0), one_metre(0, 0));
-  const PoseInformation loop = loopEdgeInformation(config);
-  EXPECT_NEAR(loop(2, 2), 1.0 / (config.loop_sigma_m * config.loop_sigma_m), 1e-6);
+  // A fit as good as exact: the loop's own sigma in every direction.
+  const PoseInformation loop = loopEdgeInformation(config, Eigen::Isometry3d::Identity(),
+                                                   Eigen::Matrix<double, 6, 6>::Zero(), metre);
+  EXPECT_NEAR(loop(2, 2), 1.0 / (config.loop_sigma_m * config.loop_sigma_m), 1e-3);
   EXPECT_NEAR(loop(5, 5), std::pow(config.loop_sigma_deg * M_PI / 180.0, -2), 1e-3);
+}
+
+TEST(LoopClosure, ALoopHoldsNothingAlongADirectionItsFitLeftUnconstrained) {
+  // The camera found in the old submap S at T_S_C; the edge's `to` node elsewhere (a lever of
+  // more than a metre, turned), as a loop's anchor is.
+  LoopClosureConfig config;
+  const Eigen::Isometry3d T_S_C = expSe3((Twist() << 0.1, -0.4, 0.2, 0.5, 0.1, 1.2).finished());
+  const Eigen::Isometry3d T_S_to = expSe3((Twist() << -0.3, 0.2, 0.1, -0.6, 0.3, 0.4).finished());
+  const double sigma2_m = config.loop_sigma_m * config.loop_sigma_m;
+  // Each direction of the camera's small motion xi = [w; v] about its centre (the tracker's
+  // covariance's), left unconstrained in turn.
+  for (int d = 0; d < 6; ++d) {
+    Twist xi = Twist::Zero();
+    xi(d) = 1e-6;
+    Eigen::Matrix<double, 6, 6> fit = 1e-8 * Eigen::Matrix<double, 6, 6>::Identity();
+    fit(d, d) = kUnconstrainedVariance;
+    const PoseInformation information = loopEdgeInformation(config, T_S_C, fit, T_S_to);
+    // The edge's error if the camera were moved by xi (T = Tr(c) exp(xi) Tr(-c) T_S_C): the `to`
+    // node moves with it.
+    Eigen::Isometry3d to_centre = Eigen::Isometry3d::Identity(), from_centre = Eigen::Isometry3d::Identity();
+    to_centre.translation() = T_S_C.translation();
+    from_centre.translation() = -T_S_C.translation();
+    const Eigen::Isometry3d moved = to_centre * expSe3(xi) * from_centre;
+    const Twist log = logSe3(T_S_to.inverse() * moved * T_S_to);  // [rotation; translation]
+    Eigen::Matrix<double, 6, 1> error;
+    error << log.tail<3>(), log.head<3>();  // the graph's order: translation first
+    const double held = error.dot(information * error);
+    EXPECT_LT(held, 1e-3 * error.squaredNorm() / sigma2_m) << "direction " << d << " is still held";
+    // Any other direction is held as the loop's sigma says.
+    Twist other = Twist::Zero();
+    other((d + 1) % 6) = 1e-6;
+    const Eigen::Isometry3d other_moved = to_centre * expSe3(other) * from_centre;
+    const Twist other_log = logSe3(T_S_to.inverse() * other_moved * T_S_to);
+    Eigen::Matrix<double, 6, 1> other_error;
+    other_error << other_log.tail<3>(), other_log.head<3>();
+    EXPECT_GT(other_error.dot(information * other_error), 1e-3 * other_error.squaredNorm() / sigma2_m)
+        << "direction " << (d + 1) % 6 << " is not held";
+  }
 }
 
 /// The default preset of 3 cm voxels, with submaps every `submap_m` and loops closed.

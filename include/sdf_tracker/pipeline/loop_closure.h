@@ -55,13 +55,21 @@ struct LoopClosureConfig {
 /// The information of the odometry edge between two consecutive submaps whose anchors are `motion`
 /// apart (LoopClosureConfig's drift model).
 PoseInformation odometryEdgeInformation(const LoopClosureConfig& config, const Eigen::Isometry3d& motion);
-/// The information of a loop edge.
-PoseInformation loopEdgeInformation(const LoopClosureConfig& config);
+/// The information of a loop edge measured by a fit of the camera in the old submap S: the fit's
+/// pose T_S_C and its covariance (TrackResult::covariance, about the camera centre along S's
+/// axes), carried to the edge's error in the frame of its `to` node, which lies at T_S_to; plus
+/// loop_sigma in every direction (what the fit does not see: each submap's own error). Along a
+/// direction the view left unconstrained (a corridor's length) the loop holds next to nothing.
+PoseInformation loopEdgeInformation(const LoopClosureConfig& config, const Eigen::Isometry3d& T_S_C,
+                                    const Eigen::Matrix<double, 6, 6>& fit_covariance_S,
+                                    const Eigen::Isometry3d& T_S_to);
 
 /// The camera found in an older submap (LoopDetector::step).
 struct LoopMatch {
   int submap = -1;                                          ///< index of the old submap
   Eigen::Isometry3d T_S_C = Eigen::Isometry3d::Identity();  ///< the camera in that submap's frame
+  /// The fit's covariance of T_S_C (TrackResult::covariance).
+  Eigen::Matrix<double, 6, 6> covariance_S = Eigen::Matrix<double, 6, 6>::Zero();
 };
 
 /// Looks for the camera's view in submaps that are not recent, where the pose graph places them

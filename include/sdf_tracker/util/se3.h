@@ -7,6 +7,9 @@ namespace sdf_tracker {
 /// Twist ordered as in the paper, eq. (5): (omega1 omega2 omega3 v1 v2 v3).
 using Twist = Eigen::Matrix<double, 6, 1>;
 
+/// [w]x, the matrix of the cross product: skew(w) * v = w x v.
+Eigen::Matrix3d skew(const Eigen::Vector3d& w);
+
 /// exp: se(3) -> SE(3), closed form (Rodrigues for rotation, V matrix for translation).
 Eigen::Isometry3d expSe3(const Twist& xi);
 
