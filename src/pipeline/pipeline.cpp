@@ -513,6 +513,12 @@ void SdfPipeline::applyGraphSolution(const BackgroundGraphSolver::Result& result
   const Eigen::Isometry3d moved = active_before.inverse() * active_.T_map_anchor();
   report->correction_m = moved.translation().norm();
   report->correction_deg = rotationAngle(moved) * 180.0 / M_PI;
+  // The recent submaps tracked with the active one lie where the solution now puts them against
+  // it: merged again.
+  if (recent_submaps_) {
+    dropRecentSubmaps();
+    mergeRecentSubmaps();
+  }
 }
 
 bool SdfPipeline::rejectedByTheGraph(size_t edge) const {
