@@ -427,6 +427,7 @@ void SdfPipeline::mergeRecentSubmaps() {
     const double left_at_m = i + 1 < closed_submaps_.size() ? closed_submaps_[i + 1].place.path_m : active_.path_m;
     if (active_.path_m - left_at_m > config_.submaps.track_recent_m) continue;
     parts.push_back(placedSubmap(*closed_submaps_[i].map, T_active_map * closed_submaps_[i].place.T_map_W));
+    recent_placements_.emplace_back(closed_submaps_[i].place.node, parts.back().T_target_map);
   }
   if (parts.empty()) return;
   recent_submaps_ = std::make_unique<SparseTsdfMap>(mergeMaps(parts));
@@ -436,6 +437,19 @@ void SdfPipeline::mergeRecentSubmaps() {
 void SdfPipeline::dropRecentSubmaps() {
   tracked_map_.reset();
   recent_submaps_.reset();
+  recent_placements_.clear();
+}
+
+bool SdfPipeline::recentSubmapsMoved() const {
+  // A tenth of a voxel at the submap's reach (MaxDepth) is what a merge would change.
+  const double voxel_m = config_.volume.voxel_size_m;
+  const double reach_m = std::max(config_.max_depth_m, voxel_m);
+  for (const auto& [node, placed] : recent_placements_) {
+    const Eigen::Isometry3d now = active_.T_map_W.inverse() * submapPlace(node).T_map_W;
+    const Eigen::Isometry3d moved = placed.inverse() * now;
+    if (moved.translation().norm() + rotationAngle(moved) * reach_m > 0.1 * voxel_m) return true;
+  }
+  return false;
 }
 
 const SubmapPlace& SdfPipeline::submapPlace(int node) const {
@@ -514,8 +528,8 @@ void SdfPipeline::applyGraphSolution(const BackgroundGraphSolver::Result& result
   report->correction_m = moved.translation().norm();
   report->correction_deg = rotationAngle(moved) * 180.0 / M_PI;
   // The recent submaps tracked with the active one lie where the solution now puts them against
-  // it: merged again.
-  if (recent_submaps_) {
+  // it: merged again, when that moved them (a merge costs the tracking thread a few hundred ms).
+  if (recent_submaps_ && recentSubmapsMoved()) {
     dropRecentSubmaps();
     mergeRecentSubmaps();
   }

@@ -90,6 +90,16 @@ void MapServices::writeTrajectory(const std::vector<st::io::StampedPose>& trajec
 
 
 bool MapServices::writeAtShutdown() {
+  {
+    // A pose graph solve still running lands first: the files hold the final optimised path and
+    // map, as sdf_tracker_offline's do.
+    std::lock_guard<std::mutex> lock(state_.mutex);
+    const st::LoopReport last = state_.pipeline->finishLoopClosure();
+    if (last.solved) {
+      std::printf("sdf_tracker: the last pose graph solve landed at shut-down: %d loop(s) kept, %d left out\n",
+                  last.closed, last.rejected);
+    }
+  }
   std::vector<st::io::StampedPose> trajectory;
   st::PlaceMemory places;
   const std::unique_ptr<st::TsdfMap> map = copyMap(&trajectory, &places);

@@ -354,6 +354,9 @@ class SdfPipeline {
   void mergeRecentSubmaps();
   /// Frees them: frames are tracked against the active submap alone (or a handover's map).
   void dropRecentSubmaps();
+  /// Whether a graph solution moved any merged recent submap against the active one by more than a
+  /// tenth of a voxel (within the camera's reach): then they are merged again.
+  bool recentSubmapsMoved() const;
   /// Ends a handover (or none): frames are tracked against the active submap alone.
   void endHandover();
   /// Frees a search's copy of the whole map unless a handover still tracks against it.
@@ -409,10 +412,12 @@ class SdfPipeline {
   std::unique_ptr<TsdfMap> search_map_;
   std::vector<Submap> closed_submaps_;
   /// With SubmapConfig::track_recent_m: the submaps the camera left within that path, merged in
-  /// the active one's frame when it started (not moved by later graph solutions until the next
-  /// one starts), and the overlay of them on the active submap that frames are tracked against.
+  /// the active one's frame when it started (and again when a graph solution moves them against
+  /// it), and the overlay of them on the active submap that frames are tracked against.
   std::unique_ptr<TsdfMap> recent_submaps_;
   std::unique_ptr<TsdfMap> tracked_map_;
+  /// The merged submaps' nodes and where they were placed in the active one's frame.
+  std::vector<std::pair<int, Eigen::Isometry3d>> recent_placements_;
   /// Where the active submap (map_) lies.
   SubmapPlace active_;
   /// The keyframes while a search runs in the merged submaps, at their places in the map frame.
