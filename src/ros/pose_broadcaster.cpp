@@ -138,10 +138,13 @@ void PoseBroadcaster::republishPath(const std::vector<sdf_tracker::io::StampedPo
     pose.pose = toPoseMsg(T_map_W * path_W[k].T_W_C);
     path_poses_.push_back(pose);
   }
-  if (path_poses_.empty()) return;
+  if (!path_poses_.empty()) sendPath();  // latched: a later subscriber gets it too
+}
+
+void PoseBroadcaster::sendPath() {
   path_.header.stamp = path_poses_.back().header.stamp;
   path_.poses.assign(path_poses_.begin(), path_poses_.end());
-  path_pub_.publish(path_);  // latched: a later subscriber gets it too
+  path_pub_.publish(path_);
 }
 
 bool PoseBroadcaster::mayPublishParentOf(const std::string& child, const std::string& parent) {
@@ -321,11 +324,7 @@ Eigen::Isometry3d PoseBroadcaster::publish(const ros::Time& stamp, const std::st
     pose_pub_.publish(pose);
     path_poses_.push_back(pose);
     while (static_cast<int>(path_poses_.size()) > path_length_) path_poses_.pop_front();
-    if (path_pub_.getNumSubscribers() > 0) {
-      path_.header.stamp = stamp;
-      path_.poses.assign(path_poses_.begin(), path_poses_.end());
-      path_pub_.publish(path_);
-    }
+    if (path_pub_.getNumSubscribers() > 0) sendPath();
   }
 
   // map -> [odom ->] base, such that map -> camera is the estimate.

@@ -480,10 +480,6 @@ void TrackerServer::process(const Frame& frame) {
   status.predicted_by_odometry = report.predicted_by_odometry;
   status.lost = lost_;
 
-  // While the camera is searched for in the map, its pose is not known: nothing goes out until a
-  // place is confirmed (the status says how the search goes). A held pose (the frame failed) goes
-  // on tf and ~odom, whose covariance says how little it is worth; ~pose, ~path and the
-  // trajectory carry estimates only.
   // A pose graph solution that landed moves the camera from this frame on (map -> base, or
   // map -> odom on a robot) and the path behind it.
   const st::LoopReport& loop = report.loop;
@@ -500,6 +496,10 @@ void TrackerServer::process(const Frame& frame) {
              loop.optimise_ms, loop.closed, loop.rejected, loop.correction_m, loop.correction_deg);
     poses_->republishPath(moved_path_W);
   }
+  // While the camera is searched for in the map, its pose is not known: nothing goes out until a
+  // place is confirmed (the status says how the search goes). A held pose (the frame failed) goes
+  // on tf and ~odom, whose covariance says how little it is worth; ~pose, ~path and the
+  // trajectory carry estimates only.
   if (pose_known) {
     // The tracker's covariance is in the active submap's frame; the estimate in the world's.
     const Eigen::Matrix3d R_W_active = T_W_C.linear() * T_active_C.linear().transpose();

@@ -83,7 +83,7 @@ class NodeTest : public ::testing::Test {
   }
   void onPath(const nav_msgs::Path& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
-    path_length_ = msg.poses.size();
+    last_path_ = msg;
   }
   void onCloud(const sensor_msgs::PointCloud2& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -134,7 +134,7 @@ class NodeTest : public ::testing::Test {
   std::condition_variable changed_;
   std::vector<sdf_tracker::TrackingStatus> statuses_;
   std::vector<st::io::StampedPose> poses_;
-  size_t path_length_ = 0;
+  nav_msgs::Path last_path_;  ///< the latest ~path
   size_t cloud_points_ = 0;
 };
 

@@ -76,7 +76,7 @@ TEST_F(NodeTest, TracksAQvgaBagLikeTheOfflineRunnerAndSurvivesBadInput) {
 
   std::lock_guard<std::mutex> lock(mutex_);
   EXPECT_EQ(static_cast<int>(poses_.size()), frames);
-  EXPECT_EQ(static_cast<int>(path_length_), frames);
+  EXPECT_EQ(static_cast<int>(last_path_.poses.size()), frames);
   EXPECT_GT(cloud_points_, 1000u);
   EXPECT_TRUE(tf_buffer.canTransform("map", "openni_depth_optical_frame", last_stamp))
       << "tf map -> camera at the last frame's stamp";
@@ -103,7 +103,7 @@ TEST_F(NodeTest, AFrameFromThePastIsDroppedWithoutWipingTheMap) {
   ros::Duration(0.3).sleep();
   std::lock_guard<std::mutex> lock(mutex_);
   EXPECT_EQ(poses_.size(), poses_before + 1);
-  EXPECT_EQ(path_length_, 4u) << "the path holds the four tracked frames since the reset";
+  EXPECT_EQ(last_path_.poses.size(), 4u) << "the path holds the four tracked frames since the reset";
 }
 
 TEST_F(NodeTest, AHeldPoseGoesOutOnNeitherPoseNorPath) {
@@ -132,7 +132,7 @@ TEST_F(NodeTest, AHeldPoseGoesOutOnNeitherPoseNorPath) {
   ros::Duration(0.3).sleep();
   std::lock_guard<std::mutex> lock(mutex_);
   EXPECT_EQ(poses_.size(), poses_before + 1) << "only the frame tracked again goes out on ~pose";
-  EXPECT_EQ(path_length_, 4u) << "the path holds the four estimates since the reset";
+  EXPECT_EQ(last_path_.poses.size(), 4u) << "the path holds the four estimates since the reset";
 }
 
 TEST_F(NodeTest, NeverGivesAFrameThatHasAParentASecondOne) {
@@ -369,7 +369,7 @@ TEST_F(NodeColourTest, ColourItCannotUseIsNamedAndTheDepthIsTrackedAndFusedWitho
   {
     std::lock_guard<std::mutex> lock(mutex_);
     EXPECT_EQ(poses_.size(), poses_before + refused) << "every frame is tracked and goes out on ~pose";
-    EXPECT_EQ(path_length_, static_cast<size_t>(refused)) << "the path holds every frame since the reset";
+    EXPECT_EQ(last_path_.poses.size(), static_cast<size_t>(refused)) << "the path holds every frame since the reset";
   }
   // The map holds no colour: every point of ~cloud is the grey of a surface never seen in colour.
   sensor_msgs::PointCloud2ConstPtr cloud = cloudAt(last_stamp);

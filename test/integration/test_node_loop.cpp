@@ -54,17 +54,12 @@ class NodeLoopTest : public NodeTest {
  protected:
   void SetUp() override {
     NodeTest::SetUp();
-    full_path_sub_ = nh_.subscribe("sdf_tracker/path", 5, &NodeLoopTest::onFullPath, this);
     mesh_blocks_sub_ = nh_.subscribe("sdf_tracker/mesh_blocks", 50, &NodeLoopTest::onMeshBlocks, this);
     diagnostics_sub_ = nh_.subscribe("/diagnostics", 50, &NodeLoopTest::onDiagnostics, this);
     for (int i = 0; i < 50 && (mesh_blocks_sub_.getNumPublishers() == 0 || diagnostics_sub_.getNumPublishers() == 0);
          ++i) {
       ros::Duration(0.1).sleep();
     }
-  }
-  void onFullPath(const nav_msgs::Path& msg) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    last_path_ = msg;
   }
   /// Counts the chunks sent again unchanged at another place: moved, not meshed again.
   void onMeshBlocks(const visualization_msgs::MarkerArray& msg) {
@@ -102,8 +97,7 @@ class NodeLoopTest : public NodeTest {
     return std::nullopt;
   }
 
-  ros::Subscriber full_path_sub_, mesh_blocks_sub_, diagnostics_sub_;
-  nav_msgs::Path last_path_;
+  ros::Subscriber mesh_blocks_sub_, diagnostics_sub_;
   std::map<int, visualization_msgs::Marker> chunks_;
   int chunks_moved_ = 0;
   int mesh_blocks_messages_ = 0;

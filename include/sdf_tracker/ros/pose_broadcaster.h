@@ -128,6 +128,8 @@ class PoseBroadcaster {
   /// tf2::TransformException while tf does not have it.
   Eigen::Isometry3d T_base_C(const std::string& camera_frame);
   void onImu(const sensor_msgs::ImuConstPtr& imu);
+  /// Publishes ~path: the poses kept, stamped as the newest.
+  void sendPath();
 
   FrameOptions frames_;
   int path_length_;
