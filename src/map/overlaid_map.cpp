@@ -7,52 +7,27 @@ namespace sdf_tracker {
 
 namespace {
 
-/// The overlay's rule over two ways of sampling (a map's, or its region sampler's).
-template <typename SampleOver, typename SampleUnder>
-bool sampleOverlaid(const SampleOver& over, const SampleUnder& under, float settled_weight, FieldSample* out) {
-  FieldSample o;
-  const bool has_over = over(&o);
-  if (has_over && o.weight >= settled_weight) {
-    *out = o;
-    return true;
-  }
-  FieldSample u;
-  if (!under(&u)) {
-    if (has_over) *out = o;
-    return has_over;
-  }
-  if (!has_over) {
-    *out = u;
-    return true;
-  }
-  const float share_over = o.weight / (o.weight + u.weight);
-  out->distance_m = u.distance_m + share_over * (o.distance_m - u.distance_m);
-  out->gradient = u.gradient + share_over * (o.gradient - u.gradient);
-  out->weight = o.weight + u.weight;
-  return true;
-}
-
-class OverlaidSampler final : public FieldSampler {
- public:
-  OverlaidSampler(std::unique_ptr<FieldSampler> over, std::unique_ptr<FieldSampler> under, float settled_weight)
-      : over_(std::move(over)), under_(std::move(under)), settled_weight_(settled_weight) {}
-  bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override {
-    return sampleOverlaid([&](FieldSample* s) { return over_->sample(p_W, s); },
-                          [&](FieldSample* s) { return under_->sample(p_W, s); }, settled_weight_, out);
-  }
-
- private:
-  std::unique_ptr<FieldSampler> over_, under_;
-  float settled_weight_;
-};
-
 [[noreturn]] void readOnly(const char* call) {
   throw std::logic_error(std::string("OverlaidMap::") + call + ": a view of two maps cannot be changed");
 }
 
 }  // namespace
 
-OverlaidMap::OverlaidMap(const TsdfMap& over, const TsdfMap& under, float settled_weight)
+class OverlaidMap::Sampler final : public FieldSampler {
+ public:
+  Sampler(const OverlaidMap& map, const Eigen::AlignedBox3f& region_W)
+      : map_(map), over_(map.over_, region_W), under_(map.under_, region_W) {}
+  bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override {
+    return map_.sampleVia([&](Voxel(&c)[8], Eigen::Vector3f* f) { return over_.cellCorners(p_W, c, f); },
+                          [&](Voxel(&c)[8], Eigen::Vector3f* f) { return under_.cellCorners(p_W, c, f); }, out);
+  }
+
+ private:
+  const OverlaidMap& map_;
+  SparseTsdfMap::RegionReader over_, under_;
+};
+
+OverlaidMap::OverlaidMap(const SparseTsdfMap& over, const SparseTsdfMap& under, float settled_weight)
     : TsdfMap(under.config(), under.type()), over_(over), under_(under), settled_weight_(settled_weight) {
   if (!over.config().sameGrid(under.config())) {
     throw std::invalid_argument("OverlaidMap: the two maps' lattices differ");
@@ -62,9 +37,34 @@ OverlaidMap::OverlaidMap(const TsdfMap& over, const TsdfMap& under, float settle
   }
 }
 
+template <typename ReadOver, typename ReadUnder>
+bool OverlaidMap::sampleVia(const ReadOver& readOver, const ReadUnder& readUnder, FieldSample* out) const {
+  Voxel over[8];
+  Eigen::Vector3f fraction;
+  if (!readOver(over, &fraction)) return false;  // outside the blocks' reach, for both (one lattice)
+  bool settled = true;
+  for (const Voxel& v : over) settled = settled && v.weight >= settled_weight_;
+  if (!settled) {
+    Voxel under[8];
+    readUnder(under, &fraction);
+    for (int c = 0; c < 8; ++c) {
+      const Voxel& o = over[c];
+      const Voxel& u = under[c];
+      if (o.weight >= settled_weight_ || u.weight <= 0.0f) continue;  // over's voxel stands
+      if (o.weight <= 0.0f) {
+        over[c] = u;
+        continue;
+      }
+      const float weight = o.weight + u.weight;
+      over[c] = Voxel{u.distance_m + (o.weight / weight) * (o.distance_m - u.distance_m), weight};
+    }
+  }
+  return interpolate(over, fraction, out);
+}
+
 bool OverlaidMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
-  return sampleOverlaid([&](FieldSample* s) { return over_.sample(p_W, s); },
-                        [&](FieldSample* s) { return under_.sample(p_W, s); }, settled_weight_, out);
+  return sampleVia([&](Voxel(&c)[8], Eigen::Vector3f* f) { return over_.cellCorners(p_W, c, f); },
+                   [&](Voxel(&c)[8], Eigen::Vector3f* f) { return under_.cellCorners(p_W, c, f); }, out);
 }
 
 Eigen::AlignedBox3f OverlaidMap::holdableRegion() const {
@@ -72,7 +72,7 @@ Eigen::AlignedBox3f OverlaidMap::holdableRegion() const {
 }
 
 std::unique_ptr<FieldSampler> OverlaidMap::sampler(const Eigen::AlignedBox3f& region_W) const {
-  return std::make_unique<OverlaidSampler>(over_.sampler(region_W), under_.sampler(region_W), settled_weight_);
+  return std::make_unique<Sampler>(*this, region_W);
 }
 
 void OverlaidMap::clear() { readOnly("clear"); }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -164,17 +165,22 @@ size_t SparseTsdfMap::memoryBytes() const {
 }
 
 template <typename FindBlock>
-bool SparseTsdfMap::sampleVia(const Eigen::Vector3f& p_W, FieldSample* out, const FindBlock& findBlock) const {
+bool SparseTsdfMap::cornersVia(const Eigen::Vector3f& p_W, Voxel (&corners)[8], Eigen::Vector3f* fraction,
+                               const FindBlock& findBlock) const {
   const Eigen::Vector3f g = toLattice(p_W);
   if (!withinReach(g)) return false;
   const Eigen::Vector3f floor_g(std::floor(g.x()), std::floor(g.y()), std::floor(g.z()));
+  *fraction = g - floor_g;
   const Eigen::Vector3i base = floor_g.cast<int>();
   const Eigen::Vector3i local = localOf(base);
-  Voxel corners[8];
+  const Voxel unobserved{positive_truncation_, 0.0f};
   if (local.maxCoeff() < kBlockSide - 1) {
     // The whole cell lies in one block (343 of 512 cells): one lookup.
     const VoxelBlock* block = findBlock(blockOf(base));
-    if (!block) return false;
+    if (!block) {
+      std::fill(std::begin(corners), std::end(corners), unobserved);
+      return true;
+    }
     const Voxel* v = block->voxels.data() + VoxelBlock::index(local);
     constexpr int dy = kBlockSide, dz = kBlockSide * kBlockSide;
     corners[0] = v[0], corners[1] = v[1], corners[2] = v[dy], corners[3] = v[dy + 1];
@@ -184,65 +190,50 @@ bool SparseTsdfMap::sampleVia(const Eigen::Vector3f& p_W, FieldSample* out, cons
     for (int c = 0; c < 8; ++c) {
       const Eigen::Vector3i corner = base + Eigen::Vector3i(c & 1, (c >> 1) & 1, (c >> 2) & 1);
       const VoxelBlock* block = findBlock(blockOf(corner));
-      if (!block) return false;
-      corners[c] = block->voxels[VoxelBlock::index(localOf(corner))];
+      corners[c] = block ? block->voxels[VoxelBlock::index(localOf(corner))] : unobserved;
     }
   }
-  return interpolate(corners, g - floor_g, out);
+  return true;
+}
+
+bool SparseTsdfMap::cellCorners(const Eigen::Vector3f& p_W, Voxel (&corners)[8], Eigen::Vector3f* fraction) const {
+  // withinReach() held, so every block index is in key range.
+  return cornersVia(p_W, corners, fraction, [this](const BlockIndex& block) { return blocks_.find(keyOf(block)); });
 }
 
 bool SparseTsdfMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
-  // withinReach() held, so every block index is in key range.
-  return sampleVia(p_W, out, [this](const BlockIndex& block) { return blocks_.find(keyOf(block)); });
+  Voxel corners[8];
+  Eigen::Vector3f fraction;
+  return cellCorners(p_W, corners, &fraction) && interpolate(corners, fraction, out);
 }
 
-/// The blocks of a box of block indices in a flat array (null where the map holds none), filled
-/// once; samples whose blocks all lie in the box read them from it, others go through the table.
-class SparseTsdfMap::RegionSampler final : public FieldSampler {
- public:
-  RegionSampler(const SparseTsdfMap& map, const Eigen::AlignedBox3f& region_W) : map_(map) {
-    // A cell at the box's far edge reads the next voxel too.
-    const Eigen::AlignedBox3f cells_W(region_W.min(), region_W.max() + Eigen::Vector3f::Constant(map.voxelSize()));
-    const BlockBox box = map.blockRange(cells_W);
-    if (box.empty() || box.count() > kMaxCells) return;  // sample through the table
-    first_ = box.first;
-    dims_ = box.last - box.first + BlockIndex::Ones();
-    cells_.assign(static_cast<size_t>(box.count()), nullptr);
-    map.forEachBlockIn(box, [this](const BlockIndex& index, const VoxelBlock& block) { cells_[cellOf(index)] = &block; });
-  }
+SparseTsdfMap::RegionReader::RegionReader(const SparseTsdfMap& map, const Eigen::AlignedBox3f& region_W) : map_(map) {
+  // A cell at the box's far edge reads the next voxel too.
+  const Eigen::AlignedBox3f cells_W(region_W.min(), region_W.max() + Eigen::Vector3f::Constant(map.voxelSize()));
+  const BlockBox box = map.blockRange(cells_W);
+  if (box.empty() || box.count() > kMaxCells) return;  // read through the table
+  first_ = box.first;
+  dims_ = box.last - box.first + BlockIndex::Ones();
+  cells_.assign(static_cast<size_t>(box.count()), nullptr);
+  map.forEachBlockIn(box, [this](const BlockIndex& index, const VoxelBlock& block) {
+    const BlockIndex at = index - first_;
+    cells_[(at.z() * dims_.y() + at.y()) * dims_.x() + at.x()] = &block;
+  });
+}
 
-  bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override {
-    return map_.sampleVia(p_W, out, [this](const BlockIndex& block) {
-      const int at = cellOf(block);
-      return at >= 0 ? cells_[at] : map_.blocks_.find(keyOf(block));
-    });
-  }
+bool SparseTsdfMap::RegionReader::cellCorners(const Eigen::Vector3f& p_W, Voxel (&corners)[8],
+                                              Eigen::Vector3f* fraction) const {
+  return map_.cornersVia(p_W, corners, fraction, [this](const BlockIndex& block) { return find(block); });
+}
 
- private:
-  /// Bounds the array at 2 MiB of pointers (a 10 m cube of 16 cm blocks); larger regions sample
-  /// through the table.
-  static constexpr double kMaxCells = 1 << 18;
-
-  /// The block's place in cells_, or -1 outside the box.
-  int cellOf(const BlockIndex& block) const {
-    // Unsigned, a negative offset compares as large: one test per axis.
-    const auto x = static_cast<unsigned>(block.x() - first_.x()), y = static_cast<unsigned>(block.y() - first_.y()),
-               z = static_cast<unsigned>(block.z() - first_.z());
-    if (x >= static_cast<unsigned>(dims_.x()) || y >= static_cast<unsigned>(dims_.y()) ||
-        z >= static_cast<unsigned>(dims_.z())) {
-      return -1;
-    }
-    return static_cast<int>((z * dims_.y() + y) * dims_.x() + x);
-  }
-
-  const SparseTsdfMap& map_;
-  BlockIndex first_ = BlockIndex::Zero();
-  Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
-  std::vector<const VoxelBlock*> cells_;
-};
+bool SparseTsdfMap::RegionReader::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
+  Voxel corners[8];
+  Eigen::Vector3f fraction;
+  return cellCorners(p_W, corners, &fraction) && map_.interpolate(corners, fraction, out);
+}
 
 std::unique_ptr<FieldSampler> SparseTsdfMap::sampler(const Eigen::AlignedBox3f& region_W) const {
-  return std::make_unique<RegionSampler>(*this, region_W);
+  return std::make_unique<RegionReader>(*this, region_W);
 }
 
 TsdfVolume toDenseVolume(const TsdfMap& map) {

@@ -431,7 +431,9 @@ void SdfPipeline::mergeRecentSubmaps() {
   }
   if (parts.empty()) return;
   recent_submaps_ = std::make_unique<SparseTsdfMap>(mergeMaps(parts));
-  tracked_map_ = std::make_unique<OverlaidMap>(*recent_submaps_, *map_, static_cast<float>(config_.integrator.max_weight));
+  // Submaps are sparse maps (Config::validate).
+  tracked_map_ = std::make_unique<OverlaidMap>(*recent_submaps_, static_cast<const SparseTsdfMap&>(*map_),
+                                               static_cast<float>(config_.submaps.recent_settled_weight));
 }
 
 void SdfPipeline::dropRecentSubmaps() {

@@ -13,6 +13,7 @@ std::vector<std::string> SubmapConfig::validate() const {
   v.requireInRange("max_rotation_deg", max_rotation_deg, 0.1, 180.0);
   v.requireInRange("handover_frames", handover_frames, 1, 1000);
   v.requireNonNegative("track_recent_m", track_recent_m);
+  v.requirePositive("recent_settled_weight", recent_settled_weight);
   return v.list();
 }
 

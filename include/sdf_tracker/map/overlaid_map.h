@@ -2,15 +2,16 @@
 
 #include <memory>
 
-#include "sdf_tracker/map/tsdf_map.h"
+#include "sdf_tracker/map/sparse_tsdf_map.h"
 
 namespace sdf_tracker {
 
-/// Two maps of one lattice read as one map holding both maps' measurements would be: where both
-/// hold a value, their weighted average (by the samples' weights, as fusing one's frames into the
-/// other averages them); where one holds a value, that one's. Where `over`'s value is settled (its
-/// weight at least `settled_weight`, the cap of the running average: a map's new frames then move
-/// it little), `over`'s alone, and `under` is not read there.
+/// Two sparse maps of one lattice read as one map holding both maps' measurements would be (as
+/// mergeMaps() would merge them, voxel by voxel): where both hold a voxel, the weighted average of
+/// their distances (as fusing one's frames into the other averages them); where one holds it, that
+/// one's. Where `over`'s voxel is settled (its weight at least `settled_weight`, the cap of the
+/// running average: a map's new frames then move it little), `over`'s alone; a cell whose eight
+/// voxels `over` holds settled does not read `under`.
 ///
 /// What the tracker reads while a new submap is young: the recent submaps (over) keep the ground
 /// they hold, the active submap (under) adds what only it has seen and what it sees again. A
@@ -20,7 +21,7 @@ class OverlaidMap final : public TsdfMap {
  public:
   /// Throws std::invalid_argument when the two maps' lattices differ or settled_weight is not
   /// positive.
-  OverlaidMap(const TsdfMap& over, const TsdfMap& under, float settled_weight);
+  OverlaidMap(const SparseTsdfMap& over, const SparseTsdfMap& under, float settled_weight);
 
   bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override;
   Eigen::AlignedBox3f holdableRegion() const override;
@@ -34,8 +35,13 @@ class OverlaidMap final : public TsdfMap {
   std::unique_ptr<TsdfMap> clone() const override;
 
  private:
-  const TsdfMap& over_;
-  const TsdfMap& under_;
+  class Sampler;
+  /// The overlay's rule for one cell, its voxels read through readOver/readUnder(corners, fraction).
+  template <typename ReadOver, typename ReadUnder>
+  bool sampleVia(const ReadOver& readOver, const ReadUnder& readUnder, FieldSample* out) const;
+
+  const SparseTsdfMap& over_;
+  const SparseTsdfMap& under_;
   float settled_weight_;
 };
 

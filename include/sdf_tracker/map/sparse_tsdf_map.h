@@ -221,8 +221,13 @@ class SparseTsdfMap : public TsdfMap {
   void copyBlocksFrom(const SparseTsdfMap& source, const std::vector<BlockIndex>& blocks);
 
   bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override;
-  /// Indexes the blocks that hold region_W in a flat array first, so samples there need no hash
-  /// lookup (about a block's table probe per sample saved).
+  /// The eight lattice voxels of the cell around p_W, as interpolate() takes them (unobserved
+  /// where no block holds one), and p_W's place in the cell ([0, 1) per axis): what sample()
+  /// interpolates. False outside the blocks' reach (withinReach).
+  bool cellCorners(const Eigen::Vector3f& p_W, Voxel (&corners)[8], Eigen::Vector3f* fraction) const;
+  class RegionReader;
+  /// A RegionReader: samples in region_W need no hash lookup (about a block's table probe per
+  /// sample saved).
   std::unique_ptr<FieldSampler> sampler(const Eigen::AlignedBox3f& region_W) const override;
   void clear() override;
   bool holdsColour() const override { return holds_colour_; }
@@ -240,16 +245,51 @@ class SparseTsdfMap : public TsdfMap {
   static constexpr int kLocalMask = kBlockSide - 1;
   static_assert(kBlockSide == 1 << kBlockShift, "kBlockSide must be 2^kBlockShift");
 
-  class RegionSampler;
-  /// sample() with the blocks found through findBlock(BlockIndex) -> const VoxelBlock*.
+  /// cellCorners() with the blocks found through findBlock(BlockIndex) -> const VoxelBlock*.
   template <typename FindBlock>
-  bool sampleVia(const Eigen::Vector3f& p_W, FieldSample* out, const FindBlock& findBlock) const;
+  bool cornersVia(const Eigen::Vector3f& p_W, Voxel (&corners)[8], Eigen::Vector3f* fraction,
+                  const FindBlock& findBlock) const;
 
   BlockTable<VoxelBlock> blocks_;
   uint64_t revision_ = 0;
   uint64_t cleared_at_ = 0;
   uint64_t removed_at_ = 0;
   bool holds_colour_ = false;
+};
+
+/// The blocks of a box of block indices around a region of the map in a flat array (null where the
+/// map holds none), filled once: samples and cells whose blocks lie in the box read them from it,
+/// others go through the map's table. What a loop over a frame's points samples a sparse map
+/// through (SparseTsdfMap::sampler()); valid while the map is neither changed nor destroyed.
+class SparseTsdfMap::RegionReader final : public FieldSampler {
+ public:
+  RegionReader(const SparseTsdfMap& map, const Eigen::AlignedBox3f& region_W);
+  /// As SparseTsdfMap::sample(), with the same result.
+  bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override;
+  /// As SparseTsdfMap::cellCorners(), with the same result.
+  bool cellCorners(const Eigen::Vector3f& p_W, Voxel (&corners)[8], Eigen::Vector3f* fraction) const;
+  const SparseTsdfMap& map() const { return map_; }
+
+ private:
+  /// Bounds the array at 2 MiB of pointers (a 10 m cube of 16 cm blocks); larger regions are read
+  /// through the table.
+  static constexpr double kMaxCells = 1 << 18;
+
+  const VoxelBlock* find(const BlockIndex& block) const {
+    // Unsigned, a negative offset compares as large: one test per axis.
+    const auto x = static_cast<unsigned>(block.x() - first_.x()), y = static_cast<unsigned>(block.y() - first_.y()),
+               z = static_cast<unsigned>(block.z() - first_.z());
+    if (x >= static_cast<unsigned>(dims_.x()) || y >= static_cast<unsigned>(dims_.y()) ||
+        z >= static_cast<unsigned>(dims_.z())) {
+      return map_.blocks_.find(keyOf(block));
+    }
+    return cells_[(z * dims_.y() + y) * dims_.x() + x];
+  }
+
+  const SparseTsdfMap& map_;
+  BlockIndex first_ = BlockIndex::Zero();
+  Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
+  std::vector<const VoxelBlock*> cells_;
 };
 
 /// The map as a dense grid: a copy of a dense one; the box around every block of a sparse one.

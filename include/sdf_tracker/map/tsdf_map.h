@@ -82,7 +82,6 @@ struct VolumeConfig {
 struct FieldSample {
   float distance_m;
   Eigen::Vector3f gradient;  ///< d(distance)/d(position), per metre of world.
-  float weight = 0.0f;       ///< the mean of the eight corners' weights: how much of what was fused lies there
 };
 
 /// Samples one map many times over one region of space: what a loop over a frame's points uses
@@ -111,6 +110,10 @@ class TsdfMap {
   Eigen::Vector3f position(const Eigen::Vector3i& voxel) const { return position(voxel.x(), voxel.y(), voxel.z()); }
   /// Continuous lattice coordinates of a world point.
   Eigen::Vector3f toLattice(const Eigen::Vector3f& p_W) const { return (p_W - origin_) * inv_voxel_size_; }
+  /// The trilinear value and gradient from the eight corner samples of a cell (corner c at
+  /// offset (c & 1, c >> 1 & 1, c >> 2 & 1)) and the fractional position f in it; false when a
+  /// corner is unobserved.
+  bool interpolate(const Voxel (&corners)[8], const Eigen::Vector3f& f, FieldSample* out) const;
 
   /// Trilinear value and its analytic gradient at p_W. Returns false when any of the 8
   /// surrounding samples is unobserved (or outside a dense grid). Thread safe.
@@ -165,10 +168,6 @@ class TsdfMap {
   TsdfMap(TsdfMap&&) = default;
   TsdfMap& operator=(TsdfMap&&) = default;
 
-  /// The trilinear value and gradient from the eight corner samples of a cell (corner c at
-  /// offset (c & 1, c >> 1 & 1, c >> 2 & 1)) and the fractional position f in it; false when a
-  /// corner is unobserved.
-  bool interpolate(const Voxel (&corners)[8], const Eigen::Vector3f& f, FieldSample* out) const;
 
   VolumeConfig config_;
   float voxel_size_;
@@ -184,8 +183,6 @@ inline bool TsdfMap::interpolate(const Voxel (&c)[8], const Eigen::Vector3f& f, 
   for (const Voxel& v : c) {
     if (v.weight <= 0.0f) return false;
   }
-  out->weight = 0.125f * (c[0].weight + c[1].weight + c[2].weight + c[3].weight + c[4].weight + c[5].weight +
-                          c[6].weight + c[7].weight);
   const float x = f.x(), y = f.y(), z = f.z();
   // Interpolate along x on the four x-edges, then along y, then along z.
   const float d00 = c[0].distance_m + x * (c[1].distance_m - c[0].distance_m);

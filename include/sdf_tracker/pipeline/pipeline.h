@@ -17,6 +17,7 @@
 #include "sdf_tracker/map/block_swap.h"
 #include "sdf_tracker/graph/background_solver.h"
 #include "sdf_tracker/graph/pose_graph.h"
+#include "sdf_tracker/map/sparse_tsdf_map.h"
 #include "sdf_tracker/map/tsdf_map.h"
 #include "sdf_tracker/pipeline/loop_closure.h"
 #include "sdf_tracker/pipeline/submaps.h"
@@ -414,7 +415,7 @@ class SdfPipeline {
   /// With SubmapConfig::track_recent_m: the submaps the camera left within that path, merged in
   /// the active one's frame when it started (and again when a graph solution moves them against
   /// it), and the overlay of them on the active submap that frames are tracked against.
-  std::unique_ptr<TsdfMap> recent_submaps_;
+  std::unique_ptr<SparseTsdfMap> recent_submaps_;
   std::unique_ptr<TsdfMap> tracked_map_;
   /// The merged submaps' nodes and where they were placed in the active one's frame.
   std::vector<std::pair<int, Eigen::Isometry3d>> recent_placements_;
