@@ -1,10 +1,12 @@
 #include "sdf_tracker/pipeline/loop_closure.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
 #include <Eigen/Eigenvalues>
+#include <omp.h>
 
 #include "sdf_tracker/util/se3.h"
 #include "sdf_tracker/util/validation.h"
@@ -80,7 +82,13 @@ LoopDetector::LoopDetector(const LoopClosureConfig& config, const RelocaliserCon
   frames_until_check_ = config_.check_interval_frames;
 }
 
+LoopDetector::~LoopDetector() {
+  if (running_.valid()) running_.wait();
+}
+
 void LoopDetector::reset() {
+  if (running_.valid()) running_.wait();
+  running_ = std::future<Outcome>();
   relocaliser_.cancel();
   search_submap_ = -1;
   search_frames_ = 0;
@@ -117,40 +125,79 @@ std::optional<int> LoopDetector::candidate(const DepthImage& depth, const Eigen:
 }
 
 LoopDetector::Step LoopDetector::step(const DepthImage& depth, const PinholeCamera& camera,
-                                      const Eigen::Isometry3d& T_A_C, const SubmapPlace& active,
+                                      const Eigen::Isometry3d& T_W_C, const SubmapPlace& active,
                                       const std::vector<Submap>& closed, const PlaceMemory& places,
                                       const std::vector<int>& keyframe_submaps) {
-  Step result;
-  const Eigen::Isometry3d T_map_C = active.T_map_W * T_A_C;
+  Step finished;
+  if (running_.valid()) {
+    if (running_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return finished;
+    finished = conclude(running_.get());
+  }
+  Job job;
+  const Eigen::Isometry3d T_map_C = active.T_map_W * T_W_C;
   if (search_submap_ < 0) {
-    if (--frames_until_check_ > 0) return result;
+    if (--frames_until_check_ > 0) return finished;
     frames_until_check_ = config_.check_interval_frames;
     const std::optional<int> submap = candidate(depth, T_map_C, active, closed, places, keyframe_submaps);
-    if (!submap) return result;
+    if (!submap) return finished;
     search_places_.clear();
     const std::vector<Keyframe>& keyframes = places.keyframes();
     for (size_t k = 0; k < keyframes.size() && k < keyframe_submaps.size(); ++k) {
       if (keyframe_submaps[k] == *submap) search_places_.add(keyframes[k]);
     }
-    try {
-      relocaliser_.begin(*closed[*submap].map);
-    } catch (const std::invalid_argument&) {
-      return result;  // a submap without a surface: nothing to find there
-    }
     search_submap_ = *submap;
     search_frames_ = 0;
+    job.begins = true;
+  } else {
+    job.motion = last_search_T_W_C_.inverse() * T_W_C;
   }
   const Submap& old = closed[search_submap_];
+  job.depth = depth;
+  job.camera = camera;
+  job.map = old.map.get();
   // Where the graph puts the camera in the old submap: the first start of the search.
-  const Eigen::Isometry3d guess = old.place.T_map_W.inverse() * T_map_C;
-  const Relocaliser::Step found = relocaliser_.step(depth, camera, *old.map, search_places_, {guess});
+  job.guess = old.place.T_map_W.inverse() * T_map_C;
+  job.T_W_C = T_W_C;
+  job.frame_submap = active.node;
+  last_search_T_W_C_ = T_W_C;
+  running_ = std::async(std::launch::async, [this, job = std::move(job)]() mutable { return search(std::move(job)); });
+  return finished;
+}
+
+LoopDetector::Outcome LoopDetector::search(Job job) {
+  // This thread's own setting: the tracking thread keeps the other cores.
+  omp_set_num_threads(1);
+  const auto start = std::chrono::steady_clock::now();
+  Outcome outcome;
+  try {
+    if (job.begins) relocaliser_.begin(*job.map);
+    outcome.found = relocaliser_.step(job.depth, job.camera, *job.map, search_places_, {job.guess}, job.motion);
+  } catch (const std::invalid_argument&) {
+    outcome.no_surface = true;  // begin(): a submap without a surface
+  }
+  outcome.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  job.depth = DepthImage();
+  outcome.job = std::move(job);
+  return outcome;
+}
+
+LoopDetector::Step LoopDetector::conclude(Outcome outcome) {
+  Step result;
+  result.submap = search_submap_;
+  result.search_ms = outcome.ms;
+  result.T_W_C = outcome.job.T_W_C;
+  result.frame_submap = outcome.job.frame_submap;
+  if (outcome.no_surface) {
+    search_submap_ = -1;
+    return result;
+  }
   ++search_frames_;
   result.searched = true;
-  result.submap = search_submap_;
+  const Relocaliser::Step& found = outcome.found;
   const bool accepted = found.outcome == Relocaliser::Outcome::kAccepted;
   // However well it fits, a place further from the graph's guess than the search reached is not
   // the one looked for.
-  const Eigen::Isometry3d offset = guess.inverse() * found.T_W_C;
+  const Eigen::Isometry3d offset = outcome.job.guess.inverse() * found.T_W_C;
   const bool plausible = offset.translation().norm() <= config_.search_radius_m &&
                          rotationAngle(offset) <= config_.search_angle_deg * kRadPerDeg;
   if (accepted && plausible) {
@@ -166,6 +213,11 @@ LoopDetector::Step LoopDetector::step(const DepthImage& depth, const PinholeCame
   search_submap_ = -1;
   frames_until_check_ = result.match ? config_.check_interval_frames : std::max(1, config_.retry_after_frames);
   return result;
+}
+
+LoopDetector::Step LoopDetector::finish() {
+  if (!running_.valid()) return Step();
+  return conclude(running_.get());
 }
 
 }  // namespace sdf_tracker

@@ -140,6 +140,8 @@ SdfPipeline::SdfPipeline(const PipelineConfig& config)
 }
 
 void SdfPipeline::clearSubmaps() {
+  // First: a loop search may be reading a closed submap.
+  if (loop_detector_) loop_detector_->reset();
   endHandover();
   dropRecentSubmaps();
   search_map_.reset();
@@ -149,7 +151,6 @@ void SdfPipeline::clearSubmaps() {
   keyframe_submaps_.clear();
   if (graph_solver_) graph_solver_->cancel();
   graph_ = PoseGraph();
-  if (loop_detector_) loop_detector_->reset();
   loop_edges_.clear();
   solved_edges_ = 0;
   rejected_edges_.clear();
@@ -416,7 +417,12 @@ void SdfPipeline::startSubmap(bool after_search) {
     handover_map_ = after_search ? search_map_.get() : closed_submaps_.back().map.get();
     handover_frames_left_ = handover_map_ ? config_.submaps.handover_frames : 0;
   }
-  if (loop_detector_) loop_detector_->startedSubmap();
+  if (loop_detector_) {
+    // After a search the camera's pose jumped into the map frame: a loop search under way would
+    // follow its places by a motion the tracker never measured, and ends.
+    if (after_search) loop_detector_->reset();
+    loop_detector_->startedSubmap();
+  }
 }
 
 void SdfPipeline::mergeRecentSubmaps() {
@@ -474,26 +480,30 @@ std::unique_ptr<PlaceMemory> SdfPipeline::placesInMapFrame() const {
 }
 
 void SdfPipeline::closeLoops(const DepthImage& filtered, const PinholeCamera& camera, FrameReport* report) {
-  LoopReport& r = report->loop;
-  const auto start = std::chrono::steady_clock::now();
-  const LoopDetector::Step step =
-      loop_detector_->step(filtered, camera, T_W_C_, active_, closed_submaps_, *places_, keyframe_submaps_);
-  r.search_ms = millisecondsSince(start);
-  r.searched = step.searched;
-  r.submap = step.submap;
-  r.message = step.message;
+  addLoop(loop_detector_->step(filtered, camera, T_W_C_, active_, closed_submaps_, *places_, keyframe_submaps_),
+          &report->loop);
+}
+
+void SdfPipeline::addLoop(const LoopDetector::Step& step, LoopReport* report) {
+  report->search_ms = step.search_ms;
+  report->searched = step.searched;
+  report->submap = step.submap;
+  report->from_submap = step.frame_submap;
+  report->message = step.message;
   if (!step.match) return;
-  // Where the active submap's anchor is in the old one's, by the camera seen from both.
+  // Where the anchor of the submap the frame was tracked in lies in the old one, by the camera
+  // seen from both.
   const SubmapPlace& old = closed_submaps_[step.match->submap].place;
-  const Eigen::Isometry3d T_S_active = step.match->T_S_C * T_W_C_.inverse() * active_.T_W_anchor;
-  const Eigen::Isometry3d T_old_active = old.T_W_anchor.inverse() * T_S_active;
+  const SubmapPlace& from = submapPlace(step.frame_submap);
+  const Eigen::Isometry3d T_S_from = step.match->T_S_C * step.T_W_C.inverse() * from.T_W_anchor;
+  const Eigen::Isometry3d T_old_from = old.T_W_anchor.inverse() * T_S_from;
   loop_edges_.push_back(graph_.edges().size());
-  graph_.addEdge(PoseEdge{old.node, active_.node, T_old_active,
-                          loopEdgeInformation(config_.loops, step.match->T_S_C, step.match->covariance_S, T_S_active),
+  graph_.addEdge(PoseEdge{old.node, from.node, T_old_from,
+                          loopEdgeInformation(config_.loops, step.match->T_S_C, step.match->covariance_S, T_S_from),
                           PoseEdgeKind::kLoop});
-  loop_detector_->joined(old.node);
+  if (from.node == active_.node) loop_detector_->joined(old.node);
   graph_solver_->solve(graph_);
-  r.found = true;
+  report->found = true;
 }
 
 void SdfPipeline::applyGraphSolution(const BackgroundGraphSolver::Result& result, LoopReport* report) {
@@ -561,6 +571,8 @@ int SdfPipeline::loopsRejected() const {
 LoopReport SdfPipeline::finishLoopClosure() {
   LoopReport report;
   if (!graph_solver_) return report;
+  // A search step still running may find a loop: it goes into the graph first.
+  addLoop(loop_detector_->finish(), &report);
   if (std::optional<BackgroundGraphSolver::Result> result = graph_solver_->finish()) {
     applyGraphSolution(*result, &report);
   }

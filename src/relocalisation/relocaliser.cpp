@@ -147,7 +147,8 @@ std::vector<Eigen::Isometry3d> Relocaliser::startingPoses(const DepthImage& dept
 }
 
 Relocaliser::Step Relocaliser::step(const DepthImage& depth, const PinholeCamera& camera, const TsdfMap& map,
-                                    const PlaceMemory& places, const std::vector<Eigen::Isometry3d>& guesses) {
+                                    const PlaceMemory& places, const std::vector<Eigen::Isometry3d>& guesses,
+                                    const Eigen::Isometry3d& motion) {
   if (!searching_ || !coarse_field_) throw std::logic_error("Relocaliser::step without begin()");
   ++frames_spent_;
   Step result;
@@ -169,10 +170,10 @@ Relocaliser::Step Relocaliser::step(const DepthImage& depth, const PinholeCamera
     }
   };
 
-  // The places that fitted so far are followed: each is tracked from its last estimate and must
-  // be verified again.
+  // The places that fitted so far are followed: each is tracked from its last estimate (moved as
+  // the camera moved, when that is known) and must be verified again.
   for (const Hypothesis& h : hypotheses_) {
-    TrackResult track = tracker_.track(depth, camera, map, h.T_W_C);
+    TrackResult track = tracker_.track(depth, camera, map, h.T_W_C * motion);
     ViewAgreement agreement;
     const bool holds = fits(track, depth, camera, map, &agreement);
     consider(std::move(track), agreement, holds, h.confirmed);

@@ -484,8 +484,8 @@ void TrackerServer::process(const Frame& frame) {
   // map -> odom on a robot) and the path behind it.
   const st::LoopReport& loop = report.loop;
   if (loop.found) {
-    ROS_INFO("sdf_tracker: loop found: the view is in submap %d (the active one is %d); solving the pose graph",
-             loop.submap, report.submap);
+    ROS_INFO("sdf_tracker: loop found: the view of submap %d is in submap %d; solving the pose graph",
+             loop.from_submap, loop.submap);
   }
   if (loop.solved) {
     status.loop_solved = true;

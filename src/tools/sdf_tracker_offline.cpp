@@ -340,7 +340,7 @@ int run(int argc, char** argv) {
     }
     if (report.loop.searched) loop_search_ms.push_back(report.loop.search_ms);
     if (report.loop.found && !args.has("quiet")) {
-      std::cout << "\nframe " << i << ": loop found from submap " << report.submap << " to submap "
+      std::cout << "\nframe " << i << ": loop found from submap " << report.loop.from_submap << " to submap "
                 << report.loop.submap << "\n";
     }
     if (report.loop.solved) {
@@ -395,6 +395,7 @@ int run(int argc, char** argv) {
     // trajectory.txt is the final one: every pose where the optimised graph places its submap,
     // once the last solve has landed.
     const st::LoopReport last = pipeline.finishLoopClosure();
+    if (last.searched) loop_search_ms.push_back(last.search_ms);
     if (last.solved) optimise_ms.push_back(last.optimise_ms);
     st::io::writeTrajectory(output.path("trajectory_online.txt"), path.published());
     // Each loop as the submaps' anchors it joins (the frames that started them), to hold against
@@ -474,7 +475,7 @@ int run(int argc, char** argv) {
   if (pipeline.config().loops.enabled) {
     summary << "\nloops: " << pipeline.loopsClosed() << " closed, " << pipeline.loopsRejected()
             << " rejected by the pose graph; "
-            << loop_search_ms.size() << " frames searched for one (ms per frame: median "
+            << loop_search_ms.size() << " frames searched for one (off the tracking thread; ms per frame: median "
             << st::tools::percentile(loop_search_ms, 0.5) << ", max " << st::tools::percentile(loop_search_ms, 1.0)
             << "); graph solved (off the tracking thread) in " << st::tools::percentile(optimise_ms, 0.5) << " ms (median), "
             << st::tools::percentile(optimise_ms, 1.0) << " ms (max); trajectory.txt is the optimised path, "

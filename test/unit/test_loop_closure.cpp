@@ -4,7 +4,9 @@
 
 #include <cmath>
 #include <iostream>
+#include <algorithm>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -84,6 +86,61 @@ TEST(LoopClosure, ALoopHoldsNothingAlongADirectionItsFitLeftUnconstrained) {
   }
 }
 
+TEST(LoopDetector, SearchesAFrameInTheBackgroundAndReportsItAtALaterOne) {
+  // An old submap (0) of the room mapped along the desk path, one after it (1) that saw nothing
+  // alike, and the active one (2), 5 m of path on: the camera is back on the desk path, where the
+  // graph (no correction yet) puts it in submap 0.
+  const PipelineConfig config = preset("default").pipeline;
+  const PinholeCamera camera = test::testCamera();
+  auto desk = [](double t_s) { return synthetic::cameraPose(synthetic::Motion::kDesk, t_s, 10.0); };
+  SdfPipeline mapping(config);
+  for (double t = 0.0; t < 3.0; t += 1.0 / 6.0) mapping.processFrameAtPose(test::renderRoom(desk(t), camera), camera, desk(t), t);
+  std::vector<Submap> closed;
+  closed.push_back(Submap{mapping.copyWholeMap(), SubmapPlace()});
+  closed.push_back(Submap{makeMap(config.volume), SubmapPlace()});
+  closed[1].place.node = 1;
+  closed[1].place.path_m = 1.0;
+  SubmapPlace active;
+  active.node = 2;
+  active.path_m = 5.0;
+  const std::vector<int> keyframe_submaps(mapping.places().keyframes().size(), 0);
+  ASSERT_FALSE(keyframe_submaps.empty());
+
+  LoopClosureConfig loops;
+  loops.check_interval_frames = 1;
+  LoopDetector detector(loops, config.relocaliser, config.tracker, config.places);
+  std::vector<Eigen::Isometry3d> handed;  // every frame's pose, in order
+  std::optional<LoopDetector::Step> found;
+  int searched = 0;
+  for (int frame = 0; frame < 90 && !found; ++frame) {
+    const Eigen::Isometry3d T_W_C = desk(1.5 + frame / 30.0);
+    const LoopDetector::Step step =
+        detector.step(test::renderRoom(T_W_C, camera), camera, T_W_C, active, closed, mapping.places(), keyframe_submaps);
+    handed.push_back(T_W_C);
+    if (!step.searched) continue;
+    ++searched;
+    EXPECT_EQ(step.submap, 0);
+    EXPECT_EQ(step.frame_submap, 2);
+    // The frame it looked at is an earlier one, handed over while no search step ran.
+    const auto earlier = std::find_if(handed.begin(), handed.end() - 1,
+                                      [&](const Eigen::Isometry3d& T) { return T.isApprox(step.T_W_C); });
+    EXPECT_NE(earlier, handed.end() - 1) << "frame " << frame << ": a step on a frame not handed over before";
+    if (step.match) found = step;
+  }
+  if (!found) {
+    const LoopDetector::Step last = detector.finish();
+    if (last.match) found = last;
+  }
+  ASSERT_TRUE(found) << "the camera back on the mapped path was not found (" << searched << " frames searched)";
+  EXPECT_EQ(found->match->submap, 0);
+  // Submap 0's frame is the one the camera was tracked in: the match is that frame's pose.
+  const Eigen::Isometry3d error = found->T_W_C.inverse() * found->match->T_S_C;
+  EXPECT_LT(error.translation().norm(), 0.01);
+  EXPECT_LT(rotationAngle(error), 0.01);
+  detector.reset();
+  EXPECT_FALSE(detector.finish().searched) << "reset() ends the search, and drops its running step";
+}
+
 /// The default preset of 3 cm voxels, with submaps every `submap_m` and loops closed.
 PipelineConfig loopPipeline(double submap_m) {
   PipelineConfig config = preset("default").pipeline;
@@ -101,7 +158,7 @@ struct CircleRun {
   std::vector<std::pair<int, Eigen::Isometry3d>> in_submaps;  ///< (submap, T_W_C) as tracked
   std::vector<Eigen::Isometry3d> published;                   ///< mapPose() at the time
   std::vector<FrameReport> reports;
-  LoopReport last_solve;  ///< the graph's solve still pending at the end, finished
+  LoopReport last_solve;  ///< the search step and graph solve still pending at the end, finished
 };
 
 CircleRun runCircle(SdfPipeline* pipeline, int frames, double period_s) {
@@ -155,7 +212,9 @@ const Circle& circle() {
 TEST(LoopClosure, ACameraBackWhereItStartedClosesALoopThatUndoesTheDrift) {
   const SdfPipeline& pipeline = *circle().pipeline;
   const CircleRun& run = circle().run;
-  int found = 0, closed = run.last_solve.closed, rejected = run.last_solve.rejected, searched = 0;
+  // The run's end waits for the last search step and solve: a loop may land there too.
+  int found = run.last_solve.found, closed = run.last_solve.closed, rejected = run.last_solve.rejected,
+      searched = run.last_solve.searched;
   for (size_t i = 0; i < run.reports.size(); ++i) {
     const LoopReport& loop = run.reports[i].loop;
     searched += loop.searched;
@@ -163,7 +222,9 @@ TEST(LoopClosure, ACameraBackWhereItStartedClosesALoopThatUndoesTheDrift) {
     rejected += loop.rejected;
     if (!loop.found) continue;
     ++found;
-    EXPECT_GE(run.reports[i].submap - loop.submap, pipeline.config().loops.min_submap_age) << "frame " << i;
+    // Found in the background on an earlier frame, tracked in this submap or one before it.
+    EXPECT_LE(loop.from_submap, run.reports[i].submap) << "frame " << i;
+    EXPECT_GE(loop.from_submap - loop.submap, pipeline.config().loops.min_submap_age) << "frame " << i;
   }
   EXPECT_EQ(closed + rejected, found) << "every loop found was solved, and kept or rejected";
   EXPECT_EQ(pipeline.loopsClosed(), closed);
@@ -178,16 +239,26 @@ TEST(LoopClosure, ACameraBackWhereItStartedClosesALoopThatUndoesTheDrift) {
   // The tracker's path without loop closure, against the path as published at the time and as
   // the graph places it in the end.
   const double drift_back_m = positionError(circle().without_loops.published[back], run.truth[back]);
-  const double published_back_m = positionError(run.published[back], run.truth[back]);
   const double optimised_back_m = positionError(optimised_back, run.truth[back]);
+  // As published a second after the camera came back: the loops are searched for in the
+  // background, on the frames the search has time for, and the graph is solved after them.
+  const size_t settled = back + static_cast<size_t>(std::lround(1.0 / kFramePeriod_s));
+  const double drift_settled_m = positionError(circle().without_loops.published[settled], run.truth[settled]);
+  const double published_settled_m = positionError(run.published[settled], run.truth[settled]);
+  size_t first_solved = 0;
+  while (first_solved < run.reports.size() && !run.reports[first_solved].loop.solved) ++first_solved;
   const double drift_end_m = positionError(circle().without_loops.published.back(), run.truth.back());
   const double end_m = positionError(pipeline.mapPose(), run.truth.back());
   std::cout << "[ figures  ] " << pipeline.submapCount() << " submaps, " << closed << " loops closed, " << searched
-            << " frames searched; back at the start the tracker had drifted " << drift_back_m * 1e3 << " mm, "
-            << published_back_m * 1e3 << " mm as published, " << optimised_back_m * 1e3
-            << " mm as optimised; at the end " << drift_end_m * 1e3 << " mm, " << end_m * 1e3 << " mm as optimised\n";
+            << " frames searched, the first solution at frame " << first_solved << "; back at the start (frame "
+            << back << ") the tracker had drifted " << drift_back_m * 1e3 << " mm, " << optimised_back_m * 1e3
+            << " mm as optimised; a second later " << drift_settled_m * 1e3 << " mm, " << published_settled_m * 1e3
+            << " mm as published; at the end " << drift_end_m * 1e3 << " mm, " << end_m * 1e3 << " mm as optimised\n";
   ASSERT_GT(drift_back_m, 0.1) << "the depth bias no longer makes the path drift: the test shows nothing";
-  EXPECT_LT(published_back_m, 0.25 * drift_back_m) << "the loops did not undo the drift as the camera came back";
+  // Two thirds of it undone as published (the graph's own solution at the return undoes three
+  // quarters, below): what is published lags the graph by the searches and solves since.
+  EXPECT_LT(published_settled_m, drift_settled_m / 3.0)
+      << "the loops did not undo the drift within a second of the camera's return";
   EXPECT_LT(optimised_back_m, 0.25 * drift_back_m) << "the graph did not undo the drift";
   EXPECT_LT(end_m, 0.5 * drift_end_m) << "the loops did not hold the path after the return";
 }

@@ -257,6 +257,38 @@ TEST(Relocaliser, FindsTheCameraFromAKeyframeAwayConfirmsItAndWritesNothing) {
   EXPECT_EQ(test::totalWeight(pipeline.map()), weight_before) << "the search never writes into the map";
 }
 
+TEST(Relocaliser, FollowsAPlaceByTheCameraMotionItIsGiven) {
+  // Frames far apart, as a loop search in the background takes them (those it has time for):
+  // between two the camera turns 8 degrees and moves 6 cm, as the tracker measured. Given that
+  // motion, the place found on the first frame is followed over the next ones and confirmed;
+  // tracked from where it was, it is lost each frame and found anew, and never confirmed.
+  const MappedRoom room(3.0);
+  const SdfPipeline& pipeline = room.pipeline;
+  const int confirm_frames = pipeline.config().relocaliser.confirm_frames;
+  Eigen::Isometry3d motion = turned(Eigen::Isometry3d::Identity(), 8.0 * M_PI / 180.0);
+  motion.translation() = Eigen::Vector3d(0.06, 0.0, 0.0);
+  for (const bool given : {true, false}) {
+    Relocaliser relocaliser(pipeline.config().relocaliser, pipeline.config().tracker);
+    relocaliser.begin(pipeline.map());
+    Relocaliser::Step step;
+    Eigen::Isometry3d truth = deskPose(1.5);
+    for (int frame = 0; frame < confirm_frames; ++frame) {
+      if (frame > 0) truth = truth * motion;
+      step = relocaliser.step(test::renderRoom(truth), room.camera, pipeline.map(), pipeline.places(), {},
+                              given ? motion : Eigen::Isometry3d::Identity());
+    }
+    if (given) {
+      ASSERT_EQ(step.outcome, Relocaliser::Outcome::kAccepted) << step.message;
+      const Eigen::Isometry3d error = truth.inverse() * step.T_W_C;
+      EXPECT_LT(error.translation().norm(), 0.01);
+      EXPECT_LT(rotationAngle(error), 0.01);
+    } else {
+      EXPECT_NE(step.outcome, Relocaliser::Outcome::kAccepted)
+          << "followed without the motion: the test shows nothing (" << step.confirmed << " confirmed)";
+    }
+  }
+}
+
 TEST(Relocaliser, AViewOfNoMappedPlaceOrOfOneWallIsNeverAccepted) {
   const MappedRoom room(2.0);
   const SdfPipeline& pipeline = room.pipeline;

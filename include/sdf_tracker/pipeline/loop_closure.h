@@ -1,5 +1,6 @@
 #pragma once
 
+#include <future>
 #include <optional>
 #include <string>
 #include <vector>
@@ -64,7 +65,7 @@ PoseInformation loopEdgeInformation(const LoopClosureConfig& config, const Eigen
                                     const Eigen::Matrix<double, 6, 6>& fit_covariance_S,
                                     const Eigen::Isometry3d& T_S_to);
 
-/// The camera found in an older submap (LoopDetector::step).
+/// The camera found in an older submap (LoopDetector::Step).
 struct LoopMatch {
   int submap = -1;                                          ///< index of the old submap
   Eigen::Isometry3d T_S_C = Eigen::Isometry3d::Identity();  ///< the camera in that submap's frame
@@ -78,31 +79,52 @@ struct LoopMatch {
 /// becomes a loop search: the relocaliser (its alignment, verification against what the submap has
 /// observed, and confirmation over several frames, with ambiguity refused), started from where the
 /// graph puts the camera in that submap and from its keyframes. A match is only what the
-/// relocaliser accepted. Not thread safe.
+/// relocaliser accepted.
+///
+/// The search runs on a thread of its own, one frame at a time, with one OpenMP thread (the
+/// tracking keeps the others): the tracking thread hands it a copy of a frame when it is free, and
+/// takes the outcome at a later frame. Tracking never waits for a search; a search looks at the
+/// frames it has time for, following the places it tries by the camera's tracked motion between
+/// them. Not thread safe itself: one caller.
 class LoopDetector {
  public:
   /// Throws std::invalid_argument naming every violation of the configs.
   LoopDetector(const LoopClosureConfig& config, const RelocaliserConfig& relocaliser, const TrackerConfig& tracker,
                const PlaceMemoryConfig& places);
+  /// Waits for a search step still running (its outcome is dropped).
+  ~LoopDetector();
+  LoopDetector(const LoopDetector&) = delete;
+  LoopDetector& operator=(const LoopDetector&) = delete;
 
   const LoopClosureConfig& config() const { return config_; }
 
+  /// A search step that finished: the frame it looked at, and what it found there.
   struct Step {
-    bool searched = false;            ///< a loop search ran on this frame
-    int submap = -1;                  ///< in which submap
+    bool searched = false;            ///< a search step finished (none: nothing else is set)
+    int submap = -1;                  ///< in which submap it searched
     std::optional<LoopMatch> match;   ///< the camera was found there (accepted)
     std::string message;              ///< why the search ended without a match, when it did
+    double search_ms = 0.0;           ///< the step's time on the search thread
+    /// The frame it looked at: the camera in the tracker's frame W then, and the submap (its
+    /// place.node) that frame was tracked in.
+    Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+    int frame_submap = -1;
   };
-  /// One tracked frame (depth as the tracker takes it, ideal camera) at T_A_C in the active
-  /// submap `active`'s frame. `closed`: the submaps before it, oldest first (indices are their
-  /// place.node); `places`: every keyframe, `keyframe_submaps[k]` the submap keyframe k was taken
-  /// in (its pose is in that submap's frame).
-  Step step(const DepthImage& depth, const PinholeCamera& camera, const Eigen::Isometry3d& T_A_C,
+  /// One tracked frame (depth as the tracker takes it, ideal camera) at T_W_C in the active submap
+  /// `active`. `closed`: the submaps before it, oldest first (indices are their place.node);
+  /// `places`: every keyframe, `keyframe_submaps[k]` the submap keyframe k was taken in (its pose
+  /// is in that submap's frame). Returns the search step that finished since the last call, if
+  /// any (it looked at an earlier frame); when the search thread is free, hands it this frame
+  /// (a copy), if a search runs or one is due. Never waits. The closed submaps' maps must stay as
+  /// they are, and in place, until reset() (only the newest may still be fused into).
+  Step step(const DepthImage& depth, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C,
             const SubmapPlace& active, const std::vector<Submap>& closed, const PlaceMemory& places,
             const std::vector<int>& keyframe_submaps);
+  /// Waits for the search step running, if any, and returns it (what a run's end must see).
+  Step finish();
 
-  /// Ends a search and forgets the submaps already joined to the active one (a cleared or
-  /// replaced map).
+  /// Ends a search (waiting for its running step, which is dropped) and forgets the submaps
+  /// already joined to the active one: before the submaps are cleared or replaced.
   void reset();
   /// A new submap is active: every older one may be joined to it.
   void startedSubmap() { joined_.clear(); }
@@ -115,13 +137,38 @@ class LoopDetector {
   std::optional<int> candidate(const DepthImage& depth, const Eigen::Isometry3d& T_map_C, const SubmapPlace& active,
                                const std::vector<Submap>& closed, const PlaceMemory& places,
                                const std::vector<int>& keyframe_submaps) const;
+  /// What the search thread is given: a frame, and where the graph puts it in the searched submap.
+  struct Job {
+    DepthImage depth;
+    PinholeCamera camera;
+    const TsdfMap* map = nullptr;  ///< the searched submap's
+    bool begins = false;           ///< the search's first frame: its field is built first
+    Eigen::Isometry3d guess = Eigen::Isometry3d::Identity();   ///< T_S_C by the graph
+    Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();  ///< tracked, since its last frame
+    Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
+    int frame_submap = -1;
+  };
+  struct Outcome {
+    Job job;  ///< its depth released
+    Relocaliser::Step found;
+    bool no_surface = false;  ///< the submap holds no surface: nothing to find there
+    double ms = 0.0;
+  };
+  /// The search thread's work on one frame.
+  Outcome search(Job job);
+  /// Ends or goes on with the search by a finished step's outcome.
+  Step conclude(Outcome outcome);
 
   LoopClosureConfig config_;
+  /// The search thread's alone while a step runs (running_), the caller's otherwise.
   Relocaliser relocaliser_;
   /// The searched submap's keyframes (what the relocaliser starts from besides the guess).
   PlaceMemory search_places_;
+  std::future<Outcome> running_;
   int search_submap_ = -1;
   int search_frames_ = 0;
+  /// The pose of the last frame handed to the search (its motion to the next one).
+  Eigen::Isometry3d last_search_T_W_C_ = Eigen::Isometry3d::Identity();
   int frames_until_check_ = 0;
   std::vector<int> joined_;
 };

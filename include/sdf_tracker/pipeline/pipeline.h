@@ -135,10 +135,12 @@ struct RelocalisationReport {
 /// A frame's loop closure (FrameReport::loop): the search for a loop, and a pose graph solution
 /// that landed (solved off the tracking thread, see SdfPipeline).
 struct LoopReport {
-  bool searched = false;  ///< a loop search ran on this frame
+  /// A loop search step finished by this frame (it ran in the background, on an earlier frame).
+  bool searched = false;
   int submap = -1;        ///< in which older submap
-  /// The camera was found there: a loop edge joins that submap to the active one, and the graph
-  /// is being solved in the background.
+  int from_submap = -1;   ///< the submap the searched frame was tracked in
+  /// The camera was found there: a loop edge joins the two, and the graph is being solved in the
+  /// background.
   bool found = false;
   /// A solution landed on this frame: how many loops found since the last one it kept, and how
   /// many it found wrong and left out.
@@ -148,7 +150,7 @@ struct LoopReport {
   /// How far that solution moved the active submap in the map frame [m, degrees].
   double correction_m = 0.0;
   double correction_deg = 0.0;
-  double search_ms = 0.0;
+  double search_ms = 0.0;     ///< the finished search step's time (on its own thread)
   double optimise_ms = 0.0;  ///< the landed solve's time (on its own thread)
   std::string message;       ///< why a search ended without a loop
 };
@@ -270,9 +272,10 @@ class SdfPipeline {
   /// again).
   int loopsClosed() const;
   int loopsRejected() const;
-  /// Waits for the pose graph's solve, if one runs or waits, and applies it: what a run's final
-  /// trajectory and map must see. The report says what it kept and moved (solved = false: nothing
-  /// was pending).
+  /// Waits for a loop search step still running (a loop it found goes into the graph) and for
+  /// the pose graph's solve, if one runs or waits, and applies it: what a run's final trajectory
+  /// and map must see. The report says what it found, kept and moved (solved = false: nothing was
+  /// pending).
   LoopReport finishLoopClosure();
   /// The memory budget (MaxMemoryMB), or nullptr when there is none.
   const MapMemoryBudget* memoryBudget() const { return budget_.get(); }
@@ -366,9 +369,12 @@ class SdfPipeline {
   void clearSubmaps();
   /// The keyframes at their places in the map frame, for a search in the merged submaps.
   std::unique_ptr<PlaceMemory> placesInMapFrame() const;
-  /// The loop detector's step on a tracked frame; a loop found goes into the graph, which is
-  /// handed to the background solver.
+  /// The loop detector's step on a tracked frame (a search in the background; what finished
+  /// since the last frame is reported); a loop found goes into the graph (addLoop).
   void closeLoops(const DepthImage& filtered, const PinholeCamera& camera, FrameReport* report);
+  /// A finished loop search step, said in `report`; a loop it found joins the submap its frame was
+  /// tracked in to the old one, and the graph is handed to the background solver.
+  void addLoop(const LoopDetector::Step& step, LoopReport* report);
   /// Places every submap where a solution of the graph puts it (those started since it was
   /// handed over move with the newest it holds) and says so in `report`.
   void applyGraphSolution(const BackgroundGraphSolver::Result& result, LoopReport* report);

@@ -84,9 +84,12 @@ class Relocaliser {
   };
   /// One frame of the search (depth as the tracker takes it, ideal camera). `guesses` are tried
   /// before the keyframes (a pose the user gave, the last known one). `map` must be the one
-  /// begin() was given, unchanged.
+  /// begin() was given, unchanged. `motion`: how the camera moved since the previous step's frame
+  /// (T_previous_this), when something measured it (a loop search's frames are tracked); the
+  /// places followed are moved by it before they are tracked. Identity: not known.
   Step step(const DepthImage& depth, const PinholeCamera& camera, const TsdfMap& map, const PlaceMemory& places,
-            const std::vector<Eigen::Isometry3d>& guesses);
+            const std::vector<Eigen::Isometry3d>& guesses,
+            const Eigen::Isometry3d& motion = Eigen::Isometry3d::Identity());
 
   /// Frames and candidates the current (or last) search has spent.
   int framesSpent() const { return frames_spent_; }
