@@ -8,6 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <omp.h>
+
 #include "sdf_tracker/map/map_merge.h"
 #include "sdf_tracker/map/overlaid_map.h"
 #include "sdf_tracker/map/sparse_tsdf_map.h"
@@ -411,6 +413,10 @@ void SdfPipeline::startSubmap(bool after_search) {
   }
   dropRecentSubmaps();
   if (!after_search && config_.submaps.track_recent_m > 0.0) {
+    // Until the recent submaps' merge lands, frames are tracked against the one just closed (in
+    // the same frame) overlaid by the new one.
+    overlayRecent(static_cast<const SparseTsdfMap&>(*closed_submaps_.back().map),
+                  {{closed.node, Eigen::Isometry3d::Identity()}});
     mergeRecentSubmaps();
   } else {
     handover_fuses_previous_ = !after_search;
@@ -426,23 +432,47 @@ void SdfPipeline::startSubmap(bool after_search) {
 }
 
 void SdfPipeline::mergeRecentSubmaps() {
+  waitForRecentMerge();  // (a merge still running would land after this one)
   std::vector<PlacedMap> parts;
+  RecentPlacements placements;
   const Eigen::Isometry3d T_active_map = active_.T_map_W.inverse();
   for (size_t i = 0; i < closed_submaps_.size(); ++i) {
     // Where the camera left submap i: where the next one started.
     const double left_at_m = i + 1 < closed_submaps_.size() ? closed_submaps_[i + 1].place.path_m : active_.path_m;
     if (active_.path_m - left_at_m > config_.submaps.track_recent_m) continue;
     parts.push_back(placedSubmap(*closed_submaps_[i].map, T_active_map * closed_submaps_[i].place.T_map_W));
-    recent_placements_.emplace_back(closed_submaps_[i].place.node, parts.back().T_target_map);
+    placements.emplace_back(closed_submaps_[i].place.node, parts.back().T_target_map);
   }
   if (parts.empty()) return;
-  recent_submaps_ = std::make_unique<SparseTsdfMap>(mergeMaps(parts));
+  // Closed submaps are not written to while they are tracked with recent ones (no handover).
+  recent_merge_ = std::async(std::launch::async, [parts = std::move(parts), placements = std::move(placements)]() {
+    omp_set_num_threads(1);  // this thread's own setting: the tracking keeps the other cores
+    return RecentMerge{std::make_unique<SparseTsdfMap>(mergeMaps(parts)), placements};
+  });
+}
+
+void SdfPipeline::landRecentMerge() {
+  if (!recent_merge_.valid() || recent_merge_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+  RecentMerge merged = recent_merge_.get();
+  recent_submaps_ = std::move(merged.map);
+  overlayRecent(*recent_submaps_, std::move(merged.placements));
+}
+
+void SdfPipeline::waitForRecentMerge() {
+  if (recent_merge_.valid()) recent_merge_.wait();
+  landRecentMerge();
+}
+
+void SdfPipeline::overlayRecent(const SparseTsdfMap& recent, RecentPlacements placements) {
   // Submaps are sparse maps (Config::validate).
-  tracked_map_ = std::make_unique<OverlaidMap>(*recent_submaps_, static_cast<const SparseTsdfMap&>(*map_),
+  tracked_map_ = std::make_unique<OverlaidMap>(recent, static_cast<const SparseTsdfMap&>(*map_),
                                                static_cast<float>(config_.submaps.recent_settled_weight));
+  recent_placements_ = std::move(placements);
 }
 
 void SdfPipeline::dropRecentSubmaps() {
+  if (recent_merge_.valid()) recent_merge_.wait();
+  recent_merge_ = std::future<RecentMerge>();
   tracked_map_.reset();
   recent_submaps_.reset();
   recent_placements_.clear();
@@ -540,9 +570,8 @@ void SdfPipeline::applyGraphSolution(const BackgroundGraphSolver::Result& result
   report->correction_m = moved.translation().norm();
   report->correction_deg = rotationAngle(moved) * 180.0 / M_PI;
   // The recent submaps tracked with the active one lie where the solution now puts them against
-  // it: merged again, when that moved them (a merge costs the tracking thread a few hundred ms).
-  if (recent_submaps_ && recentSubmapsMoved()) {
-    dropRecentSubmaps();
+  // it: merged again, when that moved them (in the background; tracked as they were until then).
+  if (tracked_map_ && recentSubmapsMoved()) {
     mergeRecentSubmaps();
   }
 }
@@ -651,6 +680,7 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     report.reset = true;
   }
 
+  landRecentMerge();  // a merge of the recent submaps that finished is tracked against from now
   if (!map_initialised_) {
     if (given_T_W_C) T_W_C_ = T_W_C_last_fused_ = *given_T_W_C;
     report.track.status = TrackStatus::kOk;

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <functional>
+#include <future>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -353,10 +354,20 @@ class SdfPipeline {
   /// first frames tracked against the closed one and fused into both; `after_search`, its first
   /// frames tracked against the whole map the camera was found in.
   void startSubmap(bool after_search);
+  /// The recent submaps' nodes and where they were placed in the active one's frame.
+  using RecentPlacements = std::vector<std::pair<int, Eigen::Isometry3d>>;
   /// With SubmapConfig::track_recent_m: merges the submaps the camera left within that path (the
-  /// one before always) in the active one's frame, and overlays them on it for tracking.
+  /// one before always) in the active one's frame, on a thread of its own; once it lands
+  /// (landRecentMerge), they are overlaid on the active one for tracking.
   void mergeRecentSubmaps();
-  /// Frees them: frames are tracked against the active submap alone (or a handover's map).
+  /// Overlays the merge that finished, if one did; never waits.
+  void landRecentMerge();
+  /// Waits for a merge still running and overlays it.
+  void waitForRecentMerge();
+  /// Frames are tracked against `recent` (placed as `placements` say) overlaid by the active one.
+  void overlayRecent(const SparseTsdfMap& recent, RecentPlacements placements);
+  /// Frees them (waiting for a merge still running): frames are tracked against the active submap
+  /// alone (or a handover's map).
   void dropRecentSubmaps();
   /// Whether a graph solution moved any merged recent submap against the active one by more than a
   /// tenth of a voxel (within the camera's reach): then they are merged again.
@@ -420,11 +431,19 @@ class SdfPipeline {
   std::vector<Submap> closed_submaps_;
   /// With SubmapConfig::track_recent_m: the submaps the camera left within that path, merged in
   /// the active one's frame when it started (and again when a graph solution moves them against
-  /// it), and the overlay of them on the active submap that frames are tracked against.
+  /// it), and the overlay of them on the active submap that frames are tracked against (until the
+  /// merge lands, the overlay of the submap just closed).
   std::unique_ptr<SparseTsdfMap> recent_submaps_;
   std::unique_ptr<TsdfMap> tracked_map_;
-  /// The merged submaps' nodes and where they were placed in the active one's frame.
-  std::vector<std::pair<int, Eigen::Isometry3d>> recent_placements_;
+  /// What the overlay holds, placed in the active one's frame.
+  RecentPlacements recent_placements_;
+  /// A merge of the recent submaps running in the background (it reads closed submaps: declared
+  /// after them, so that it ends before they go).
+  struct RecentMerge {
+    std::unique_ptr<SparseTsdfMap> map;
+    RecentPlacements placements;
+  };
+  std::future<RecentMerge> recent_merge_;
   /// Where the active submap (map_) lies.
   SubmapPlace active_;
   /// The keyframes while a search runs in the merged submaps, at their places in the map frame.

@@ -23,9 +23,10 @@ struct SubmapConfig {
   /// that the new one holds the view before the tracker relies on it alone.
   int handover_frames = 10;
   /// Frames are tracked against the active submap and the submaps the camera left within this much
-  /// path before it started (the one before always), read as one map (merged when the submap starts, overlaid on it): ground seen again
-  /// after a short path is tracked as one map would track it, while each submap keeps only its own
-  /// frames [m]. 0: the active submap alone, after the handover.
+  /// path before it started (the one before always), read as one map (merged in the background
+  /// when the submap starts, overlaid on it; until the merge lands, the one before alone is
+  /// overlaid): ground seen again after a short path is tracked as one map would track it, while
+  /// each submap keeps only its own frames [m]. 0: the active submap alone, after the handover.
   double track_recent_m = 4.0;
   /// Where a recent submaps' voxel holds at least this weight (8 frames' at the reference noise),
   /// it alone is read, not the active submap's (OverlaidMap's settled weight): the recent ones
