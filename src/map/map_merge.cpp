@@ -10,14 +10,6 @@ namespace sdf_tracker {
 
 namespace {
 
-/// Adds `voxel`'s observation to `into` as a fusion of the same measurements would have.
-void accumulate(const Voxel& voxel, Voxel* into) {
-  if (voxel.weight <= 0.0f) return;
-  const float weight = into->weight + voxel.weight;
-  into->distance_m = (into->distance_m * into->weight + voxel.distance_m * voxel.weight) / weight;
-  into->weight = weight;
-}
-
 /// Adds a colour seen `colour.weight` times to `into`: their weighted average, the weight their
 /// sum up to the most a voxel's colour holds.
 void accumulate(const VoxelColour& colour, VoxelColour* into) {

@@ -3,6 +3,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "sdf_tracker/map/map_merge.h"
+
 namespace sdf_tracker {
 
 namespace {
@@ -48,15 +50,7 @@ bool OverlaidMap::sampleVia(const ReadOver& readOver, const ReadUnder& readUnder
     Voxel under[8];
     readUnder(under, &fraction);
     for (int c = 0; c < 8; ++c) {
-      const Voxel& o = over[c];
-      const Voxel& u = under[c];
-      if (o.weight >= settled_weight_ || u.weight <= 0.0f) continue;  // over's voxel stands
-      if (o.weight <= 0.0f) {
-        over[c] = u;
-        continue;
-      }
-      const float weight = o.weight + u.weight;
-      over[c] = Voxel{u.distance_m + (o.weight / weight) * (o.distance_m - u.distance_m), weight};
+      if (over[c].weight < settled_weight_) accumulate(under[c], &over[c]);  // else over's voxel stands
     }
   }
   return interpolate(over, fraction, out);

@@ -182,15 +182,15 @@ LoopDetector::Outcome LoopDetector::search(Job job) {
 }
 
 LoopDetector::Step LoopDetector::conclude(Outcome outcome) {
+  if (outcome.no_surface) {
+    search_submap_ = -1;
+    return Step();  // nothing was searched
+  }
   Step result;
   result.submap = search_submap_;
   result.search_ms = outcome.ms;
   result.T_W_C = outcome.job.T_W_C;
   result.frame_submap = outcome.job.frame_submap;
-  if (outcome.no_surface) {
-    search_submap_ = -1;
-    return result;
-  }
   ++search_frames_;
   result.searched = true;
   const Relocaliser::Step& found = outcome.found;

@@ -518,20 +518,20 @@ void SdfPipeline::addLoop(const LoopDetector::Step& step, LoopReport* report) {
   report->search_ms = step.search_ms;
   report->searched = step.searched;
   report->submap = step.submap;
-  report->from_submap = step.frame_submap;
+  report->frame_submap = step.frame_submap;
   report->message = step.message;
   if (!step.match) return;
   // Where the anchor of the submap the frame was tracked in lies in the old one, by the camera
   // seen from both.
   const SubmapPlace& old = closed_submaps_[step.match->submap].place;
-  const SubmapPlace& from = submapPlace(step.frame_submap);
-  const Eigen::Isometry3d T_S_from = step.match->T_S_C * step.T_W_C.inverse() * from.T_W_anchor;
-  const Eigen::Isometry3d T_old_from = old.T_W_anchor.inverse() * T_S_from;
+  const SubmapPlace& tracked_in = submapPlace(step.frame_submap);
+  const Eigen::Isometry3d T_S_anchor = step.match->T_S_C * step.T_W_C.inverse() * tracked_in.T_W_anchor;
+  const Eigen::Isometry3d T_old_anchor = old.T_W_anchor.inverse() * T_S_anchor;
   loop_edges_.push_back(graph_.edges().size());
-  graph_.addEdge(PoseEdge{old.node, from.node, T_old_from,
-                          loopEdgeInformation(config_.loops, step.match->T_S_C, step.match->covariance_S, T_S_from),
+  graph_.addEdge(PoseEdge{old.node, tracked_in.node, T_old_anchor,
+                          loopEdgeInformation(config_.loops, step.match->T_S_C, step.match->covariance_S, T_S_anchor),
                           PoseEdgeKind::kLoop});
-  if (from.node == active_.node) loop_detector_->joined(old.node);
+  if (tracked_in.node == active_.node) loop_detector_->joined(old.node);
   graph_solver_->solve(graph_);
   report->found = true;
 }

@@ -485,7 +485,7 @@ void TrackerServer::process(const Frame& frame) {
   const st::LoopReport& loop = report.loop;
   if (loop.found) {
     ROS_INFO("sdf_tracker: loop found: the view of submap %d is in submap %d; solving the pose graph",
-             loop.from_submap, loop.submap);
+             loop.frame_submap, loop.submap);
   }
   if (loop.solved) {
     status.loop_solved = true;

@@ -340,8 +340,8 @@ int run(int argc, char** argv) {
     }
     if (report.loop.searched) loop_search_ms.push_back(report.loop.search_ms);
     if (report.loop.found && !args.has("quiet")) {
-      std::cout << "\nframe " << i << ": loop found from submap " << report.loop.from_submap << " to submap "
-                << report.loop.submap << "\n";
+      std::cout << "\nframe " << i << ": loop found: the view of submap " << report.loop.frame_submap
+                << " is in submap " << report.loop.submap << "\n";
     }
     if (report.loop.solved) {
       optimise_ms.push_back(report.loop.optimise_ms);

@@ -223,8 +223,8 @@ TEST(LoopClosure, ACameraBackWhereItStartedClosesALoopThatUndoesTheDrift) {
     if (!loop.found) continue;
     ++found;
     // Found in the background on an earlier frame, tracked in this submap or one before it.
-    EXPECT_LE(loop.from_submap, run.reports[i].submap) << "frame " << i;
-    EXPECT_GE(loop.from_submap - loop.submap, pipeline.config().loops.min_submap_age) << "frame " << i;
+    EXPECT_LE(loop.frame_submap, run.reports[i].submap) << "frame " << i;
+    EXPECT_GE(loop.frame_submap - loop.submap, pipeline.config().loops.min_submap_age) << "frame " << i;
   }
   EXPECT_EQ(closed + rejected, found) << "every loop found was solved, and kept or rejected";
   EXPECT_EQ(pipeline.loopsClosed(), closed);

@@ -15,6 +15,16 @@ struct PlacedMap {
   Eigen::Isometry3d T_target_map = Eigen::Isometry3d::Identity();
 };
 
+/// Adds `voxel`'s observation to `into` as a fusion of the same measurements would have: the
+/// weighted average of the two distances, the weights summed (nothing for an unobserved voxel).
+/// The rule by which mergeMaps() and OverlaidMap read two maps as one.
+inline void accumulate(const Voxel& voxel, Voxel* into) {
+  if (voxel.weight <= 0.0f) return;
+  const float weight = into->weight + voxel.weight;
+  into->distance_m = (into->distance_m * into->weight + voxel.distance_m * voxel.weight) / weight;
+  into->weight = weight;
+}
+
 /// One map of the parts, as if every part's measurements had been fused into it: each voxel the
 /// weighted average of the parts' distances there, its weight their sum (one surface where two
 /// parts overlap, not two). A part at the identity adds its voxels as they are; one moved is

@@ -139,7 +139,7 @@ struct LoopReport {
   /// A loop search step finished by this frame (it ran in the background, on an earlier frame).
   bool searched = false;
   int submap = -1;        ///< in which older submap
-  int from_submap = -1;   ///< the submap the searched frame was tracked in
+  int frame_submap = -1;  ///< the submap the searched frame was tracked in
   /// The camera was found there: a loop edge joins the two, and the graph is being solved in the
   /// background.
   bool found = false;
