@@ -356,8 +356,9 @@ std::vector<ParameterSpec> buildTable() {
                             [](auto& s) -> auto& { return s.pipeline.relocaliser.max_contradiction; }));
   t.push_back(bound<double>("SubmapSize", "m",
                             "sparse map: the map as submaps along the path (what loop closure moves), a new one once "
-                            "the camera is this far from where the active one started; 0 one map",
-                            closed(0.0, 1e4), same(0.0), kAtStart, kAll,
+                            "the camera is this far from where the active one started; 0 one map (the default preset's "
+                            "1 m holds for a sparse map without MaxMemoryMB: one map where it was not typed)",
+                            closed(0.0, 1e4), {1.0, 0.0, 0.0}, kAtStart, kAll,
                             [](auto& s) -> auto& { return s.pipeline.submaps.max_distance_m; }));
   t.push_back(bound<double>("SubmapTurn", "deg",
                             "with SubmapSize: a new submap also once the camera has turned this much from the way "
@@ -378,7 +379,7 @@ std::vector<ParameterSpec> buildTable() {
   t.push_back(bound<bool>("LoopClosure", "",
                           "with SubmapSize: find the view again in submaps that are not recent (the place memory, "
                           "verified and confirmed as a relocalisation is) and place every submap anew by a pose graph",
-                          {}, same(false), kAtStart, kAll,
+                          {}, {true, false, false}, kAtStart, kAll,
                           [](auto& s) -> auto& { return s.pipeline.loops.enabled; }));
   t.push_back(bound<double>("LoopSearchRadius", "m",
                             "with LoopClosure: keyframes of older submaps this close to the camera, where the graph "
@@ -479,6 +480,24 @@ std::vector<std::string> Settings::validate() const {
   // for fields the table does not hold (set in code, not by a user).
   if (v.list().empty()) v.merge("", pipeline.validate());
   return v.list();
+}
+
+std::optional<std::string> Settings::keepToOneMapWhereNeeded(const std::vector<std::string>& given,
+                                                             bool loads_dense_map) {
+  auto typed = [&given](const char* name) { return std::find(given.begin(), given.end(), name) != given.end(); };
+  if (!pipeline.submaps.enabled() || typed("SubmapSize")) return std::nullopt;
+  std::string why;
+  if (pipeline.volume.type == MapType::kDense) why = "MapType=dense holds no submaps";
+  else if (pipeline.max_map_memory_mb > 0.0) why = "swapping (MaxMemoryMB=" + toText(pipeline.max_map_memory_mb) + ") keeps to one map";
+  else if (loads_dense_map) why = "the map loaded is a dense grid (.vti), which holds no submaps";
+  if (why.empty()) return std::nullopt;
+  std::string note = "one map, no submaps (SubmapSize=0): " + why;
+  pipeline.submaps.max_distance_m = 0.0;
+  if (pipeline.loops.enabled && !typed("LoopClosure")) {
+    pipeline.loops.enabled = false;
+    note += ", and no loop closure (LoopClosure=false), which moves submaps";
+  }
+  return note;
 }
 
 std::vector<std::string> Settings::withoutEffect(const std::vector<std::string>& given) const {

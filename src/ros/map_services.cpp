@@ -78,7 +78,7 @@ std::unique_ptr<st::TsdfMap> MapServices::copyMap(std::vector<st::io::StampedPos
     const Eigen::Isometry3d T_map_W = poses_.T_map_W();
     for (st::io::StampedPose& pose : *trajectory) pose.T_W_C = T_map_W * pose.T_W_C;
   }
-  if (places) *places = state_.pipeline->places();
+  if (places) *places = *state_.pipeline->placesInMapFrame();  // where the pose graph places them
   return state_.pipeline->copyWholeMap();  // swapped blocks (MaxMemoryMB) included
 }
 
@@ -235,12 +235,22 @@ bool MapServices::loadVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
     const std::string held = st::io::describeLoadedPlaces(places.get(), state_.pipeline->config().relocalise);
     const std::string grey =
         st::io::describeLoadedColour(*loaded, state_.pipeline->config().fuse_colour && options_.colourUsable());
+    // A grid holds no submaps: where the user left SubmapSize to the preset, one map from now on
+    // (as a grid loaded at the start is); typed, setMap refuses it by name.
+    std::string one_map;
+    st::Settings settings{state_.pipeline->config(), st::CameraSettings()};
+    if (loaded->type() == st::MapType::kDense) {
+      if (const auto note = settings.keepToOneMapWhereNeeded(options_.given_parameters, true)) {
+        state_.pipeline->keepToOneMap();
+        one_map = "; " + *note;
+      }
+    }
     state_.pipeline->setMap(std::move(loaded), std::move(places));
     state_.path.clear();
     state_.restarted = true;
     if (T_map_W) poses_.restoreMapFrame(*T_map_W);
     return "tracking against " + path + ", which " + held + "; " + describeLoadedMapFrame(T_map_W.has_value()) +
-           (grey.empty() ? "" : "; it " + grey);
+           (grey.empty() ? "" : "; it " + grey) + one_map;
   });
 }
 

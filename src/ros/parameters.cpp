@@ -4,6 +4,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "sdf_tracker/io/files.h"
 #include "sdf_tracker/ros/conversions.h"
 #include "sdf_tracker/util/validation.h"
 
@@ -102,7 +103,7 @@ const std::map<std::string, OptionSetter>& nodeOptionTable() {
 }  // namespace
 
 void readParameters(const ros::NodeHandle& pnh, st::Settings* settings, NodeOptions* options,
-                    std::vector<std::string>* warnings) {
+                    std::vector<std::string>* warnings, std::vector<std::string>* notes) {
   // Every private parameter, typed as the server holds it.
   std::map<std::string, st::ParameterValue> given;
   std::vector<std::string> all;
@@ -170,11 +171,14 @@ void readParameters(const ros::NodeHandle& pnh, st::Settings* settings, NodeOpti
   errors.require(
       options->tum_camera.empty() || !options->intrinsics_from_parameters,
       "~tum_camera (" + options->tum_camera + ") and FocalLength/CenterPoint both give the intrinsics: set one");
+  for (const auto& entry : given) options->given_parameters.push_back(entry.first);
+  const bool loads_dense_map = st::io::hasExtension(options->load_volume, ".vti");
+  if (const auto note = settings->keepToOneMapWhereNeeded(options->given_parameters, loads_dense_map)) {
+    notes->push_back(*note);
+  }
   if (errors.list().empty()) errors.merge("", settings->validate());
   st::throwIfInvalid("parameters of " + pnh.getNamespace(), errors.list());
-  std::vector<std::string> names;
-  for (const auto& entry : given) names.push_back(entry.first);
-  for (const std::string& note : settings->withoutEffect(names)) warnings->push_back("~" + note);
+  for (const std::string& note : settings->withoutEffect(options->given_parameters)) warnings->push_back("~" + note);
 }
 
 std::vector<std::pair<std::string, st::ParameterValue>> reconfigureValues(const sdf_tracker::SdfTrackerConfig& config) {

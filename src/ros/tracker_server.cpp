@@ -56,10 +56,11 @@ std::string statusText(const st::TrackResult& result) {
 }  // namespace
 
 TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh), pnh_(pnh), it_(nh) {
-  std::vector<std::string> warnings;
+  std::vector<std::string> warnings, notes;
   st::Settings settings;
-  readParameters(pnh_, &settings, &options_, &warnings);
+  readParameters(pnh_, &settings, &options_, &warnings, &notes);
   for (const auto& warning : warnings) ROS_WARN("sdf_tracker: %s", warning.c_str());
+  for (const auto& note : notes) ROS_INFO("sdf_tracker: %s", note.c_str());
   camera_settings_ = settings.camera;
   // Before the reconfigure server, whose first call may subscribe to it.
   colour_topic_ = nh_.resolveName(options_.colour_topic.empty() ? options_.camera_name + "/rgb/image_color"

@@ -145,6 +145,8 @@ int run(int argc, char** argv) {
     }
     return 0;
   }
+  const bool loads_dense_map = st::io::hasExtension(args.get("load-volume", ""), ".vti");
+  if (const auto note = settings.keepToOneMapWhereNeeded(given, loads_dense_map)) std::cout << "note: " << *note << "\n";
   st::throwIfInvalid("parameters", settings.validate());
   for (const std::string& note : settings.withoutEffect(given)) std::cerr << "warning: --param " << note << "\n";
 #ifdef _OPENMP
@@ -422,7 +424,7 @@ int run(int argc, char** argv) {
     const st::TriangleMesh mesh = st::extractMesh(map);
     st::io::writePly(output.path("mesh.ply"), mesh);
     st::io::writePly(output.path("cloud.ply"), st::extractSurfaceCloud(map));
-    if (args.has("save-map")) st::io::writeMap(output.path("map.sdfmap"), map, &pipeline.places());
+    if (args.has("save-map")) st::io::writeMap(output.path("map.sdfmap"), map, pipeline.placesInMapFrame().get());
     if (args.has("save-volume")) {
       if (volume_region) st::io::writeVti(output.path("sdf_volume.vti"), st::toDenseVolume(map, *volume_region));
       else st::io::writeMap(output.path("sdf_volume.vti"), map);

@@ -192,8 +192,8 @@ TEST_F(NodeRelocalisationTest, ASecondSessionWhoseFirstViewIsHalfNewIsFoundInThe
       first.processFrameAtPose(half_new.mappingView(i, kQvga, exact, 0), kQvga, half_new.mapping[i].T_W_C,
                                half_new.mapping[i].timestamp_s);
     }
-    st::io::writeMap(path, first.map(), &first.places(), saved_frame);
-    st::io::writeMap(path_in_node_frame, first.map(), &first.places(), node_frame);
+    st::io::writeMap(path, *first.copyWholeMap(), first.placesInMapFrame().get(), saved_frame);
+    st::io::writeMap(path_in_node_frame, *first.copyWholeMap(), first.placesInMapFrame().get(), node_frame);
   }
   sdf_tracker::SavePath load;
   load.request.path = path;

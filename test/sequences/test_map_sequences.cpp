@@ -36,6 +36,9 @@ TEST(SparseMap, TracksTheDeskPathAsTheDenseGridDoes) {
   settings.pipeline.volume.dims = Eigen::Vector3i(160, 160, 160);
   settings.pipeline.volume.voxel_size_m = 0.04;
   settings.pipeline.initial_camera_in_grid = Eigen::Vector3d(0.5, 0.5, 0.4);
+  // One map in each storage (the dense grid holds no submaps).
+  setParameter(&settings, "SubmapSize", 0.0);
+  setParameter(&settings, "LoopClosure", false);
   setParameter(&settings, "MapType", std::string("dense"));
   SdfPipeline dense(settings.pipeline);
   setParameter(&settings, "MapType", std::string("sparse"));
@@ -66,7 +69,7 @@ TEST(SparseMap, ASavedMapIsTrackedAfterLoadingAsBeforeSaving) {
     mapping_worst_m = std::max(mapping_worst_m, (mapper.pose().translation() - truth(i).translation()).norm());
   }
   const std::string path = test::scratchDirectory("tracked_map") + "/map.sdfmap";
-  io::writeMap(path, mapper.map());
+  io::writeMap(path, *mapper.copyWholeMap());
 
   // A new session (dense by its settings) loads the file and tracks the same frames in it. Where
   // it starts is not known: the map's origin (the first camera's pose) is tried first, and
@@ -125,6 +128,9 @@ TEST(SparseMap, AMemoryBudgetSwapsBlocksOutAndBackWithoutChangingTheTrajectoryOr
   exact.enabled = false;
   Settings settings = preset("default");
   setParameter(&settings, "MapType", std::string("sparse"));
+  // One map: swapping keeps to one (a bound with submaps is refused).
+  setParameter(&settings, "SubmapSize", 0.0);
+  setParameter(&settings, "LoopClosure", false);
   SdfPipeline unbounded(settings.pipeline);
   std::vector<DepthImage> frames;
   std::vector<Eigen::Isometry3d> poses;

@@ -80,7 +80,7 @@ TEST(PipelineRelocalisation, ASecondSessionInASavedMapFindsItsPlaceOrIsToldIt) {
     SdfPipeline first(preset("default").pipeline);
     for (double t : loopTimes(0.0, 4.0)) first.processFrame(loopView(t), test::testCamera(), t);
     T_map_world = first.pose() * loopPose(4.0 - 1.0 / 15.0).inverse();
-    io::writeMap(path, first.map(), &first.places());
+    io::writeMap(path, *first.copyWholeMap(), first.placesInMapFrame().get());
   }
   auto session = [&](const std::optional<Eigen::Isometry3d>& told, double t0) {
     auto pipeline = std::make_unique<SdfPipeline>(preset("default").pipeline);
@@ -114,7 +114,7 @@ TEST(PipelineRelocalisation, ASecondSessionInASavedMapFindsItsPlaceOrIsToldIt) {
 /// user's second session is).
 std::unique_ptr<SdfPipeline> secondSession(const SdfPipeline& first, const std::string& name) {
   const std::string path = test::scratchDirectory(name) + "/map.sdfmap";
-  io::writeMap(path, first.map(), &first.places());
+  io::writeMap(path, *first.copyWholeMap(), first.placesInMapFrame().get());
   auto pipeline = std::make_unique<SdfPipeline>(preset("default").pipeline);
   std::unique_ptr<PlaceMemory> places;
   std::unique_ptr<TsdfMap> map = io::readMap(path, false, &places);

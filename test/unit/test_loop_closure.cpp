@@ -315,6 +315,7 @@ TEST(LoopClosure, EveryLoopClosedAgreesWithTheTruth) {
 
 TEST(LoopClosure, ParametersRefuseLoopsWithoutSubmapsByName) {
   Settings settings = preset("default");
+  setParameterFromText(&settings, "SubmapSize", "0");
   setParameterFromText(&settings, "LoopClosure", "true");
   const std::vector<std::string> errors = settings.validate();
   ASSERT_EQ(errors.size(), 1u);
@@ -324,8 +325,9 @@ TEST(LoopClosure, ParametersRefuseLoopsWithoutSubmapsByName) {
   EXPECT_TRUE(settings.validate().empty());
 
   Settings unused = preset("default");
+  setParameterFromText(&unused, "LoopClosure", "false");
   setParameterFromText(&unused, "LoopSearchRadius", "3");
-  const std::vector<std::string> notes = unused.withoutEffect({"LoopSearchRadius"});
+  const std::vector<std::string> notes = unused.withoutEffect({"LoopClosure", "LoopSearchRadius"});
   ASSERT_EQ(notes.size(), 1u);
   EXPECT_NE(notes[0].find("LoopSearchRadius=3 has no effect without LoopClosure=true"), std::string::npos) << notes[0];
   EXPECT_THROW(setParameterFromText(&unused, "LoopSearchRadius", "0"), std::invalid_argument);

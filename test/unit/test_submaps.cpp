@@ -179,7 +179,7 @@ TEST(OverlaidMap, IsAReadOnlyViewOfOneLattice) {
 constexpr double kFramePeriod_s = 1.0 / 30.0;
 constexpr double kDeskDuration_s = 10.0;
 
-/// The default preset (a sparse map) of 3 cm voxels, with submaps every `size_m`, each tracked
+/// The default preset (a sparse map) of 3 cm voxels without loop closure, with submaps every `size_m`, each tracked
 /// against the one before for `handover_frames` and then alone, or (track_recent_m) with the
 /// submaps the camera left within that path.
 PipelineConfig submapPipeline(double size_m, int handover_frames, double track_recent_m = 0.0) {
@@ -188,6 +188,7 @@ PipelineConfig submapPipeline(double size_m, int handover_frames, double track_r
   config.submaps.max_distance_m = size_m;
   config.submaps.handover_frames = handover_frames;
   config.submaps.track_recent_m = track_recent_m;
+  config.loops.enabled = false;  // the submaps alone
   return config;
 }
 
@@ -330,8 +331,9 @@ TEST(Submaps, ParametersRefuseWhatSubmapsCannotDoYetByName) {
   EXPECT_NE(swap_errors[0].find("SubmapSize=2 and MaxMemoryMB=64"), std::string::npos) << swap_errors[0];
 
   Settings unused = preset("default");
+  setParameterFromText(&unused, "SubmapSize", "0");
   setParameterFromText(&unused, "SubmapTurn", "30");
-  const std::vector<std::string> notes = unused.withoutEffect({"SubmapTurn"});
+  const std::vector<std::string> notes = unused.withoutEffect({"SubmapSize", "SubmapTurn"});
   ASSERT_EQ(notes.size(), 1u);
   EXPECT_NE(notes[0].find("SubmapTurn=30 has no effect without SubmapSize"), std::string::npos) << notes[0];
   EXPECT_THROW(setParameterFromText(&unused, "SubmapTurn", "0"), std::invalid_argument);
@@ -339,6 +341,59 @@ TEST(Submaps, ParametersRefuseWhatSubmapsCannotDoYetByName) {
   setParameterFromText(&unused, "SubmapTrackRecent", "2");
   ASSERT_EQ(unused.withoutEffect({"SubmapTrackRecent"}).size(), 1u);
   EXPECT_THROW(setParameterFromText(&unused, "SubmapTrackRecent", "-1"), std::invalid_argument);
+}
+
+TEST(Submaps, TheDefaultPresetClosesLoopsWhereTheMapCanHoldSubmapsAndSaysWhereItCannot) {
+  const Settings defaults = preset("default");
+  EXPECT_GT(defaults.pipeline.submaps.max_distance_m, 0.0);
+  EXPECT_TRUE(defaults.pipeline.loops.enabled);
+  for (const char* name : {"paper", "reference"}) {
+    EXPECT_FALSE(preset(name).pipeline.submaps.enabled()) << name << ": the paper's one map";
+    EXPECT_FALSE(preset(name).pipeline.loops.enabled) << name;
+  }
+
+  Settings sparse = defaults;
+  EXPECT_FALSE(sparse.keepToOneMapWhereNeeded({"MapType"}, false).has_value());
+  EXPECT_TRUE(sparse.pipeline.loops.enabled);
+  EXPECT_TRUE(sparse.validate().empty());
+
+  // Each map that cannot hold submaps, when SubmapSize was left to the preset: one map, no
+  // loops, said once, and the settings valid.
+  Settings dense = defaults;
+  setParameterFromText(&dense, "MapType", "dense");
+  const auto dense_note = dense.keepToOneMapWhereNeeded({"MapType"}, false);
+  ASSERT_TRUE(dense_note.has_value());
+  EXPECT_NE(dense_note->find("MapType=dense"), std::string::npos) << *dense_note;
+  EXPECT_NE(dense_note->find("LoopClosure=false"), std::string::npos) << *dense_note;
+  EXPECT_FALSE(dense.pipeline.submaps.enabled());
+  EXPECT_FALSE(dense.pipeline.loops.enabled);
+  EXPECT_TRUE(dense.validate().empty()) << dense.validate()[0];
+
+  Settings swapping = defaults;
+  setParameterFromText(&swapping, "MaxMemoryMB", "64");
+  const auto swap_note = swapping.keepToOneMapWhereNeeded({"MaxMemoryMB"}, false);
+  ASSERT_TRUE(swap_note.has_value());
+  EXPECT_NE(swap_note->find("MaxMemoryMB=64"), std::string::npos) << *swap_note;
+  EXPECT_TRUE(swapping.validate().empty());
+
+  Settings loading_grid = defaults;
+  const auto grid_note = loading_grid.keepToOneMapWhereNeeded({}, true);
+  ASSERT_TRUE(grid_note.has_value());
+  EXPECT_NE(grid_note->find(".vti"), std::string::npos) << *grid_note;
+  EXPECT_FALSE(loading_grid.pipeline.submaps.enabled());
+
+  // What the user typed stands, and is refused by the parameter they typed.
+  Settings typed_size = defaults;
+  setParameterFromText(&typed_size, "MapType", "dense");
+  EXPECT_FALSE(typed_size.keepToOneMapWhereNeeded({"MapType", "SubmapSize"}, false).has_value());
+  ASSERT_EQ(typed_size.validate().size(), 1u);
+  EXPECT_NE(typed_size.validate()[0].find("SubmapSize=1 applies to MapType=sparse only"), std::string::npos);
+
+  Settings typed_loops = defaults;
+  setParameterFromText(&typed_loops, "MapType", "dense");
+  ASSERT_TRUE(typed_loops.keepToOneMapWhereNeeded({"MapType", "LoopClosure"}, false).has_value());
+  ASSERT_EQ(typed_loops.validate().size(), 1u);
+  EXPECT_NE(typed_loops.validate()[0].find("LoopClosure=true needs SubmapSize > 0"), std::string::npos);
 }
 
 }  // namespace

@@ -290,6 +290,9 @@ class SdfPipeline {
   /// for, from the start pose first (see relocalise()); off, the next frame is tracked from the
   /// start pose.
   void setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemory> places = nullptr);
+  /// From now on one map, without submaps or loop closure: for a dense grid to be loaded by
+  /// setMap() into a pipeline made with submaps (which a grid cannot hold). Clears the submaps.
+  void keepToOneMap();
 
   /// Forgets where the camera is: the next frames search the map for it (needs relocalise on),
   /// trying `guess` first when given (a pose the user knows), and fuse nothing until a candidate
@@ -304,8 +307,11 @@ class SdfPipeline {
   /// camera is searched for in a loaded map or after relocalise(), when pose() is only the start
   /// pose.
   bool poseKnown() const { return !pose_unknown_; }
-  /// The keyframes the map was built from.
+  /// The keyframes the map was built from, each in its submap's frame (see placesInMapFrame()).
   const PlaceMemory& places() const { return *places_; }
+  /// The keyframes where the pose graph now places their submaps, in the map frame: what a search
+  /// in the merged submaps reads, and what a saved map (with copyWholeMap()) must hold.
+  std::unique_ptr<PlaceMemory> placesInMapFrame() const;
 
   /// Live-changeable settings (dynamic reconfigure): everything but the grid geometry. Throws
   /// std::invalid_argument (leaving the pipeline unchanged) when the candidate is invalid or
@@ -378,8 +384,6 @@ class SdfPipeline {
   void dropSearchMap();
   /// Back to one empty submap (and no graph), for a cleared or replaced map.
   void clearSubmaps();
-  /// The keyframes at their places in the map frame, for a search in the merged submaps.
-  std::unique_ptr<PlaceMemory> placesInMapFrame() const;
   /// The loop detector's step on a tracked frame (a search in the background; what finished
   /// since the last frame is reported); a loop found goes into the graph (addLoop).
   void closeLoops(const DepthImage& filtered, const PinholeCamera& camera, FrameReport* report);

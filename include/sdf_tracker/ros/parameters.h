@@ -25,6 +25,9 @@ struct FrameOptions {
 /// The node's own options (ROS plumbing).
 struct NodeOptions {
   std::string preset = "default";
+  /// The private parameters the user set (names as typed): a rule that leaves what was not typed
+  /// to the map (Settings::keepToOneMapWhereNeeded) reads them again when a map is loaded.
+  std::vector<std::string> given_parameters;
   std::string camera_name = "camera";  ///< c_name
   bool depth_registered = false;
   /// The colour images the map is coloured from (with Colour on); empty: <c_name>/rgb/image_color.
@@ -66,9 +69,11 @@ std::string stripSlash(const std::string& frame_id);
 /// Reads every private parameter of `pnh` once. Throws std::invalid_argument listing every
 /// invalid, mistyped or out-of-range value by its parameter name ("~CellSize must be in ...");
 /// nothing is clamped or replaced by a default. `warnings` receives, for the log, the names nobody
-/// reads and the parameters the others leave without effect (Settings::withoutEffect).
+/// reads and the parameters the others leave without effect (Settings::withoutEffect); `notes`
+/// (for the log, at info) what the settings left to the preset became for this map
+/// (Settings::keepToOneMapWhereNeeded).
 void readParameters(const ros::NodeHandle& pnh, sdf_tracker::Settings* settings, NodeOptions* options,
-                    std::vector<std::string>* warnings);
+                    std::vector<std::string>* warnings, std::vector<std::string>* notes);
 
 /// dynamic_reconfigure <-> the parameter table, typed (no rounding through text).
 std::vector<std::pair<std::string, sdf_tracker::ParameterValue>> reconfigureValues(
