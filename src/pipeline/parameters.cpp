@@ -487,7 +487,8 @@ std::optional<std::string> Settings::keepToOneMapWhereNeeded(const std::vector<s
   auto typed = [&given](const char* name) { return std::find(given.begin(), given.end(), name) != given.end(); };
   if (!pipeline.submaps.enabled() || typed("SubmapSize")) return std::nullopt;
   std::string why;
-  if (pipeline.volume.type == MapType::kDense) why = "MapType=dense holds no submaps";
+  if (!pipeline.loops.enabled && typed("LoopClosure")) why = "LoopClosure=false, and submaps serve loop closure";
+  else if (pipeline.volume.type == MapType::kDense) why = "MapType=dense holds no submaps";
   else if (pipeline.max_map_memory_mb > 0.0) why = "swapping (MaxMemoryMB=" + toText(pipeline.max_map_memory_mb) + ") keeps to one map";
   else if (loads_dense_map) why = "the map loaded is a dense grid (.vti), which holds no submaps";
   if (why.empty()) return std::nullopt;

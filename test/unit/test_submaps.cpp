@@ -376,6 +376,17 @@ TEST(Submaps, TheDefaultPresetClosesLoopsWhereTheMapCanHoldSubmapsAndSaysWhereIt
   EXPECT_NE(swap_note->find("MaxMemoryMB=64"), std::string::npos) << *swap_note;
   EXPECT_TRUE(swapping.validate().empty());
 
+  Settings no_loops = defaults;
+  setParameterFromText(&no_loops, "LoopClosure", "false");
+  const auto no_loops_note = no_loops.keepToOneMapWhereNeeded({"LoopClosure"}, false);
+  ASSERT_TRUE(no_loops_note.has_value()) << "submaps without loops only cost";
+  EXPECT_NE(no_loops_note->find("LoopClosure=false"), std::string::npos) << *no_loops_note;
+  EXPECT_FALSE(no_loops.pipeline.submaps.enabled());
+  Settings submaps_alone = defaults;
+  setParameterFromText(&submaps_alone, "LoopClosure", "false");
+  EXPECT_FALSE(submaps_alone.keepToOneMapWhereNeeded({"LoopClosure", "SubmapSize"}, false).has_value());
+  EXPECT_TRUE(submaps_alone.pipeline.submaps.enabled()) << "submaps alone, when both are typed";
+
   Settings loading_grid = defaults;
   const auto grid_note = loading_grid.keepToOneMapWhereNeeded({}, true);
   ASSERT_TRUE(grid_note.has_value());

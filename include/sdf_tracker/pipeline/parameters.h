@@ -37,9 +37,10 @@ struct Settings {
   std::vector<std::string> withoutEffect(const std::vector<std::string>& given) const;
   /// The default preset's submaps (SubmapSize 1 m) and loop closure hold for a sparse map
   /// without a memory bound. Where the user did not type SubmapSize (`given`: names as typed) and
-  /// the map cannot hold submaps (MapType=dense, MaxMemoryMB > 0, or `loads_dense_map`: the map
-  /// to be loaded is a dense grid), it sets one map, and loop closure off unless typed, and says
-  /// so in a sentence to show the user once. A SubmapSize the user typed is left for validate()
+  /// typed LoopClosure=false (submaps serve loop closure), or the map cannot hold submaps
+  /// (MapType=dense, MaxMemoryMB > 0, or `loads_dense_map`: the map to be loaded is a dense
+  /// grid), it sets one map, and loop closure off unless typed, and says so in a sentence to show
+  /// the user once. A SubmapSize the user typed is left for validate()
   /// to refuse with the other parameter's name.
   std::optional<std::string> keepToOneMapWhereNeeded(const std::vector<std::string>& given, bool loads_dense_map);
 };
