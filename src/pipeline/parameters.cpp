@@ -179,6 +179,11 @@ constexpr bool kAtStart = false;
 constexpr const char* kGridSizeParameters[] = {"GridSizeX", "GridSizeY", "GridSizeZ"};
 constexpr const char* kInitialCameraParameters[] = {"InitialCameraX", "InitialCameraY", "InitialCameraZ"};
 
+/// Whether the user gave parameter `name` (`given`: names as typed).
+bool isGiven(const std::vector<std::string>& given, const std::string& name) {
+  return std::find(given.begin(), given.end(), name) != given.end();
+}
+
 Range closed(double low, double high) { return {low, high, false, false}; }
 Range leftOpen(double low, double high) { return {low, high, true, false}; }
 Range rightOpen(double low, double high) { return {low, high, false, true}; }
@@ -484,17 +489,16 @@ std::vector<std::string> Settings::validate() const {
 
 std::optional<std::string> Settings::keepToOneMapWhereNeeded(const std::vector<std::string>& given,
                                                              bool loads_dense_map) {
-  auto typed = [&given](const char* name) { return std::find(given.begin(), given.end(), name) != given.end(); };
-  if (!pipeline.submaps.enabled() || typed("SubmapSize")) return std::nullopt;
+  if (!pipeline.submaps.enabled() || isGiven(given, "SubmapSize")) return std::nullopt;
   std::string why;
-  if (!pipeline.loops.enabled && typed("LoopClosure")) why = "LoopClosure=false, and submaps serve loop closure";
+  if (!pipeline.loops.enabled && isGiven(given, "LoopClosure")) why = "LoopClosure=false, and submaps serve loop closure";
   else if (pipeline.volume.type == MapType::kDense) why = "MapType=dense holds no submaps";
   else if (pipeline.max_map_memory_mb > 0.0) why = "swapping (MaxMemoryMB=" + toText(pipeline.max_map_memory_mb) + ") keeps to one map";
   else if (loads_dense_map) why = "the map loaded is a dense grid (.vti), which holds no submaps";
   if (why.empty()) return std::nullopt;
   std::string note = "one map, no submaps (SubmapSize=0): " + why;
   pipeline.submaps.max_distance_m = 0.0;
-  if (pipeline.loops.enabled && !typed("LoopClosure")) {
+  if (pipeline.loops.enabled && !isGiven(given, "LoopClosure")) {
     pipeline.loops.enabled = false;
     note += ", and no loop closure (LoopClosure=false), which moves submaps";
   }
@@ -508,7 +512,7 @@ std::vector<std::string> Settings::withoutEffect(const std::vector<std::string>&
     int count = 0;
     for (const auto& names : {kGridSizeParameters, kInitialCameraParameters}) {
       for (int axis = 0; axis < 3; ++axis) {
-        if (std::find(given.begin(), given.end(), names[axis]) == given.end()) continue;
+        if (!isGiven(given, names[axis])) continue;
         grid += (count++ ? ", " : "") + std::string(names[axis]) + "=" + toText(findParameter(names[axis])->get(*this));
       }
     }
@@ -518,14 +522,13 @@ std::vector<std::string> Settings::withoutEffect(const std::vector<std::string>&
                       "by them");
     }
   }
-  const bool swap_directory_given = std::find(given.begin(), given.end(), "SwapDirectory") != given.end();
-  if (swap_directory_given && !(pipeline.max_map_memory_mb > 0.0)) {
+  if (isGiven(given, "SwapDirectory") && !(pipeline.max_map_memory_mb > 0.0)) {
     notes.push_back("SwapDirectory=" + pipeline.swap_directory + " has no effect without MaxMemoryMB, the bound "
                     "beyond which blocks go to a swap file there; set MaxMemoryMB too");
   }
   if (!pipeline.submaps.enabled()) {
     for (const char* name : {"SubmapTurn", "SubmapHandoverFrames", "SubmapTrackRecent"}) {
-      if (std::find(given.begin(), given.end(), name) == given.end()) continue;
+      if (!isGiven(given, name)) continue;
       notes.push_back(std::string(name) + "=" + toText(findParameter(name)->get(*this)) +
                       " has no effect without SubmapSize, the distance at which a new submap starts; set "
                       "SubmapSize too");
@@ -533,7 +536,7 @@ std::vector<std::string> Settings::withoutEffect(const std::vector<std::string>&
   }
   if (!pipeline.loops.enabled) {
     for (const char* name : {"LoopSearchRadius", "LoopCheckFrames"}) {
-      if (std::find(given.begin(), given.end(), name) == given.end()) continue;
+      if (!isGiven(given, name)) continue;
       notes.push_back(std::string(name) + "=" + toText(findParameter(name)->get(*this)) +
                       " has no effect without LoopClosure=true; set it too");
     }

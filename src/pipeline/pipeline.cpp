@@ -177,24 +177,23 @@ void SdfPipeline::reset() {
   held_pose_timestamp_s_ = tracked_interval_s_ = std::numeric_limits<double>::quiet_NaN();
 }
 
-void SdfPipeline::keepToOneMap() {
-  clearSubmaps();
-  loop_detector_.reset();
-  graph_solver_.reset();
-  config_.submaps.max_distance_m = 0.0;
-  config_.loops.enabled = false;
-}
-
-void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemory> places) {
+void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemory> places, bool one_map_for_grid) {
   if (!map) throw std::invalid_argument("setMap: no map");
   if (map->observesNothing()) throw std::invalid_argument("the map holds no observed voxel: nothing to track against");
-  if (config_.submaps.enabled() && map->type() != MapType::kSparse) {
+  const bool grid_in_submaps = config_.submaps.enabled() && map->type() != MapType::kSparse;
+  if (grid_in_submaps && !one_map_for_grid) {
     std::ostringstream size;
     size << config_.submaps.max_distance_m;
     throw std::invalid_argument("submaps (SubmapSize=" + size.str() + " m) need a sparse map, and this one is a " +
                                 map->config().describe() + ": load a .sdfmap, or start with SubmapSize=0 (one map)");
   }
   clearSubmaps();
+  if (grid_in_submaps) {
+    loop_detector_.reset();
+    graph_solver_.reset();
+    config_.submaps.max_distance_m = 0.0;
+    config_.loops.enabled = false;
+  }
   map_ = std::move(map);
   config_.volume = map_->config();
   budget_ = makeBudget(config_, map_->type());

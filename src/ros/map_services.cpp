@@ -237,20 +237,16 @@ bool MapServices::loadVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
         st::io::describeLoadedColour(*loaded, state_.pipeline->config().fuse_colour && options_.colourUsable());
     // A grid holds no submaps: where the user left SubmapSize to the preset, one map from now on
     // (as a grid loaded at the start is); typed, setMap refuses it by name.
-    std::string one_map;
     st::Settings settings{state_.pipeline->config(), st::CameraSettings()};
-    if (loaded->type() == st::MapType::kDense) {
-      if (const auto note = settings.keepToOneMapWhereNeeded(options_.given_parameters, true)) {
-        state_.pipeline->keepToOneMap();
-        one_map = "; " + *note;
-      }
-    }
-    state_.pipeline->setMap(std::move(loaded), std::move(places));
+    const bool grid = loaded->type() == st::MapType::kDense;
+    const std::optional<std::string> one_map =
+        grid ? settings.keepToOneMapWhereNeeded(options_.given_parameters, true) : std::nullopt;
+    state_.pipeline->setMap(std::move(loaded), std::move(places), one_map.has_value());
     state_.path.clear();
     state_.restarted = true;
     if (T_map_W) poses_.restoreMapFrame(*T_map_W);
     return "tracking against " + path + ", which " + held + "; " + describeLoadedMapFrame(T_map_W.has_value()) +
-           (grey.empty() ? "" : "; it " + grey) + one_map;
+           (grey.empty() ? "" : "; it " + grey) + (one_map ? "; " + *one_map : "");
   });
 }
 

@@ -288,11 +288,11 @@ class SdfPipeline {
   /// Replaces the map (e.g. a loaded .vti) with one of any type, and the place memory with
   /// `places` (none: an empty one). With relocalise on, the camera's place in it is then searched
   /// for, from the start pose first (see relocalise()); off, the next frame is tracked from the
-  /// start pose.
-  void setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemory> places = nullptr);
-  /// From now on one map, without submaps or loop closure: for a dense grid to be loaded by
-  /// setMap() into a pipeline made with submaps (which a grid cannot hold). Clears the submaps.
-  void keepToOneMap();
+  /// start pose. A dense grid cannot hold submaps: with submaps on it is refused, unless
+  /// `one_map_for_grid` (the user left submaps to the preset), which makes the pipeline one map
+  /// without loop closure from now on. Throws before changing anything.
+  void setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemory> places = nullptr,
+              bool one_map_for_grid = false);
 
   /// Forgets where the camera is: the next frames search the map for it (needs relocalise on),
   /// trying `guess` first when given (a pose the user knows), and fuse nothing until a candidate
