@@ -14,6 +14,7 @@
 #include "sdf_tracker/map/overlaid_map.h"
 #include "sdf_tracker/map/sparse_tsdf_map.h"
 #include "sdf_tracker/map/tsdf_volume.h"
+#include "sdf_tracker/relocalisation/view_agreement.h"
 #include "sdf_tracker/util/se3.h"
 #include "sdf_tracker/util/validation.h"
 
@@ -26,6 +27,9 @@ constexpr int kBriefLossFrames = 2;
 /// No frame for this many of the camera's intervals between tracked frames (and longer than the
 /// prediction bridges): frames went missing, and the camera may have been carried anywhere.
 constexpr double kMissingFrameIntervals = 10.0;
+/// No pose for more than this many of the camera's intervals between tracked frames: a frame (at
+/// least) went missing, and the prediction spans more motion than one frame's.
+constexpr double kOneFrameMissingIntervals = 1.5;
 /// Along directions a degenerate view does not constrain, each such frame keeps this part of the
 /// predicted motion: the motion decays (to half in 7 frames) instead of persisting, and all of
 /// it adds up to no more than nine frames' worth.
@@ -280,6 +284,30 @@ MotionPrior::Odometry odometryPrior(const Eigen::Isometry3d& T_W_C_predicted, co
                kMinOdometrySigma_rad)),
       Eigen::Vector3d::Constant(std::max(odometry_error * distance_m, kMinOdometrySigma_m));
   return prior;
+}
+
+TrackResult SdfPipeline::trackFrom(const Eigen::Isometry3d& guess, const MotionPrior& prior, const DepthImage& filtered,
+                                   const PinholeCamera& camera, double timestamp_s) const {
+  TrackResult track = tracker_->track(filtered, camera, trackingMap(), guess, prior);
+  const double unseen_s = timestamp_s - held_pose_timestamp_s_;
+  // A level ends early only once its step falls below the convergence threshold.
+  const bool ran_out = track.final_step >= config_.tracker.convergence_threshold;
+  if (!track.ok() || !ran_out || !(unseen_s > kOneFrameMissingIntervals * tracked_interval_s_)) return track;
+  ViewAgreement agreement;
+  if (relocaliser_->agrees(filtered, camera, trackingMap(), track.T_W_C, &agreement)) return track;
+  std::ostringstream s;
+  s << "ran out of iterations " << std::setprecision(3) << unseen_s
+    << " s after the last tracked frame, and the view does not agree with the map there: "
+    << std::lround(100.0 * agreement.mappedShare()) << " % on mapped surfaces (RelocaliseMinOverlap "
+    << relocaliser_->config().min_overlap << "), " << std::fixed << std::setprecision(1)
+    << 100.0 * agreement.contradictionShare() << " % against what the map saw (RelocaliseMaxContradiction "
+    << std::defaultfloat << relocaliser_->config().max_contradiction << ")";
+  track.status = TrackStatus::kNotConverged;
+  track.T_W_C = guess;
+  track.pose_estimated = false;
+  track.covariance.setZero();
+  track.message = s.str();
+  return track;
 }
 
 Eigen::Isometry3d SdfPipeline::predictPose(double timestamp_s) const {
@@ -733,10 +761,10 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
       prior.T_W_C_unconstrained = T_W_C_ * expSe3(kUnobservedMotionKept * logSe3(T_W_C_.inverse() * predicted));
     }
     report.tracked_in_previous_submap = handover_map_ != nullptr;
-    report.track = tracker_->track(filtered, ideal_camera, trackingMap(), predicted, prior);
+    report.track = trackFrom(predicted, prior, filtered, ideal_camera, timestamp_s);
     if (!given_T_W_C && !report.track.tracked() && !predicted.isApprox(T_W_C_)) {
       // The prediction may have led astray (the camera stopped or turned): try from the last pose.
-      TrackResult from_last = tracker_->track(filtered, ideal_camera, trackingMap(), T_W_C_, prior);
+      TrackResult from_last = trackFrom(T_W_C_, prior, filtered, ideal_camera, timestamp_s);
       if (from_last.tracked()) report.track = std::move(from_last);
     }
     report.tracking_ms = millisecondsSince(start);

@@ -96,8 +96,12 @@ void Relocaliser::cancel() {
 
 bool Relocaliser::fits(const TrackResult& track, const DepthImage& depth, const PinholeCamera& camera,
                        const TsdfMap& map, ViewAgreement* agreement) const {
-  if (!track.ok()) return false;
-  *agreement = measureViewAgreement(depth, camera, map, track.T_W_C, kVerificationStride);
+  return track.ok() && agrees(depth, camera, map, track.T_W_C, agreement);
+}
+
+bool Relocaliser::agrees(const DepthImage& depth, const PinholeCamera& camera, const TsdfMap& map,
+                         const Eigen::Isometry3d& T_W_C, ViewAgreement* agreement) const {
+  *agreement = measureViewAgreement(depth, camera, map, T_W_C, kVerificationStride);
   return agreement->mappedShare() >= config_.min_overlap &&
          agreement->contradictionShare() <= config_.max_contradiction;
 }

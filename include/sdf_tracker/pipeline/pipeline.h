@@ -336,6 +336,13 @@ class SdfPipeline {
   /// Where the camera should be at `timestamp_s` if it kept its last motion; the last pose when
   /// prediction is off or there is no motion to go by.
   Eigen::Isometry3d predictPose(double timestamp_s) const;
+  /// Tracks the frame from `guess` against trackingMap(). After frames went missing (no pose for
+  /// longer than the camera's interval allows) the guess may be far off, and Gauss-Newton can
+  /// settle in a wrong place that fits much of the view: a fit there that ran out of iterations at
+  /// the finest level must agree with the map as a relocalisation candidate must, or the frame
+  /// fails (kNotConverged) and nothing wrong is fused.
+  TrackResult trackFrom(const Eigen::Isometry3d& guess, const MotionPrior& prior, const DepthImage& filtered,
+                        const PinholeCamera& camera, double timestamp_s) const;
   /// With a memory budget: reads back the swapped blocks near the view from T_W_C up to
   /// furthest_m (what tracking or fusion there may touch), counted in the report.
   void restoreNear(const Eigen::Isometry3d& T_W_C, const PinholeCamera& camera, float furthest_m, FrameReport* report);

@@ -91,6 +91,12 @@ class Relocaliser {
             const std::vector<Eigen::Isometry3d>& guesses,
             const Eigen::Isometry3d& motion = Eigen::Isometry3d::Identity());
 
+  /// Whether a view placed at T_W_C agrees with what the map observed as a kept candidate must (at
+  /// least min_overlap of its points on mapped surfaces, at most max_contradiction against what
+  /// the map saw); `agreement` gets the measure. Reads the map only.
+  bool agrees(const DepthImage& depth, const PinholeCamera& camera, const TsdfMap& map, const Eigen::Isometry3d& T_W_C,
+              ViewAgreement* agreement) const;
+
   /// Frames and candidates the current (or last) search has spent.
   int framesSpent() const { return frames_spent_; }
   int candidatesTried() const { return candidates_tried_; }

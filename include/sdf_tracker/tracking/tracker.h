@@ -65,7 +65,9 @@ struct TrackerConfig {
 
 enum class TrackStatus {
   kOk,
-  kNotConverged,  ///< iterations ran out with the pose still moving.
+  kNotConverged,  ///< iterations ran out with the pose still moving; or (set by the pipeline) they
+                  ///< ran out after missing frames at a pose the map contradicts (the guess is
+                  ///< handed back then, not estimated).
   kTooFewPoints,  ///< too few points landed in observed parts of the field.
   kDegenerate,    ///< the geometry does not constrain all six degrees of freedom (e.g. one plane).
                   ///< With solve_constrained_directions the pose is still estimated (see tracked()).
@@ -93,8 +95,8 @@ constexpr double kUnconstrainedVariance = 1e6;
 
 struct TrackResult {
   TrackStatus status = TrackStatus::kBadInput;
-  /// The estimate (camera to world). For kOk and kNotConverged it is the optimised pose; for any
-  /// other status it is the guess, unchanged.
+  /// The estimate (camera to world). For kOk and kNotConverged it is the optimised pose (unless the
+  /// pipeline refused it: pose_estimated false); for any other status it is the guess, unchanged.
   Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
   std::vector<int> iterations_per_level;
   double rms_residual_m = 0.0;  ///< RMS of D at the valid points of the last iteration.
