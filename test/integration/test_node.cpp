@@ -17,6 +17,7 @@
 
 #include "node_test.h"
 #include "run_command.h"
+#include "scratch_directory.h"
 #include "sdf_tracker/surface/surface.h"
 
 namespace node_test {
@@ -24,9 +25,7 @@ namespace {
 
 TEST_F(NodeTest, TracksAQvgaBagLikeTheOfflineRunnerAndSurvivesBadInput) {
   const int frames = ros::NodeHandle("~").param("frames", 60);
-  char pattern[] = "/tmp/sdf_tracker_node_test_XXXXXX";
-  ASSERT_NE(mkdtemp(pattern), nullptr);
-  const std::string directory = pattern;
+  const std::string directory = st::test::scratchDirectory("node_test");
   const std::string bag_path = makeSyntheticBag(directory, frames);
   const st::TumSequence sequence = st::TumSequence::open(directory);
 
@@ -440,9 +439,8 @@ TEST(TrackerNode, OutputFilesAreCheckedAtTheStartAndReportedAtShutDown) {
             std::string::npos)
       << run.output;
 
-  char folder[] = "/tmp/sdf_tracker_output_check_XXXXXX";
-  ASSERT_NE(mkdtemp(folder), nullptr);
-  const std::string trajectory = std::string(folder) + "/trajectory.txt";
+  const std::string folder = st::test::scratchDirectory("output_check");
+  const std::string trajectory = folder + "/trajectory.txt";
   run = st::test::runCommand("timeout --preserve-status -s INT 8 " + node +
                              "__name:=written_at_shut_down _trajectory_file:=" + trajectory);
   EXPECT_EQ(run.exit_code, 0) << run.output;
@@ -479,8 +477,7 @@ TEST(CameraDrivers, WithoutACameraOrRecordingExitWithAnErrorNamingIt) {
       << run.output;
 
   // A recording whose calibration file cannot be read: refused, not replayed with a guess.
-  char dump[] = "/tmp/sdf_tracker_corrupt_calibration_XXXXXX";
-  ASSERT_NE(mkdtemp(dump), nullptr);
+  const std::string dump = st::test::scratchDirectory("corrupt_calibration");
   std::ofstream(std::string(dump) + "/INDEX.txt") << "d-1.000000-0.pgm\n";
   std::ofstream(std::string(dump) + "/depth_camera_info.yaml") << "image_width: [not, a, number\n";
   run = st::test::runCommand("ROS_NAMESPACE=no_camera timeout 30 fakenect " + std::string(dump) +
@@ -500,5 +497,7 @@ TEST(CameraDrivers, WithoutACameraOrRecordingExitWithAnErrorNamingIt) {
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "sdf_tracker_node_test");
-  return RUN_ALL_TESTS();
+  const int result = RUN_ALL_TESTS();
+  st::test::removeScratchDirectories(result == 0);
+  return result;
 }

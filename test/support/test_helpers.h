@@ -17,6 +17,7 @@
 #include "sdf_tracker/map/sparse_tsdf_map.h"
 #include "sdf_tracker/map/tsdf_volume.h"
 #include "sdf_tracker/sim/synthetic.h"
+#include "scratch_directory.h"
 
 namespace sdf_tracker::test {
 
@@ -61,13 +62,6 @@ inline double totalWeight(const TsdfMap& map) {
     for (size_t i = 0; i < volume.voxelCount(); ++i) sum += volume.voxel(i).weight;
   }
   return sum;
-}
-
-/// A fresh, unique scratch directory under the system temp folder.
-inline std::string scratchDirectory(const std::string& name) {
-  std::string pattern = std::string(std::getenv("TMPDIR") ? std::getenv("TMPDIR") : "/tmp") + "/sdf_tracker_" + name + "_XXXXXX";
-  if (!mkdtemp(pattern.data())) throw std::runtime_error("cannot create a scratch directory");
-  return pattern;
 }
 
 /// Writes `text` to `path` as it is (binary).
