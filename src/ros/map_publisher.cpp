@@ -1,5 +1,6 @@
 #include "sdf_tracker/ros/map_publisher.h"
 
+#include <algorithm>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -204,7 +205,17 @@ const st::TsdfMap& MapPublisher::wholeMap() {
     closed.push_back({part.copy->identity(), part.snapshot->syncedRevision(), part.T_W_part.matrix()});
     placed.push_back({&static_cast<const st::SparseTsdfMap&>(*part.copy), part.T_W_part});
   }
-  if (!closed_merged_ || closed != closed_merged_state_) {
+  // A submap closed since, the others as they were: only it is added to the merge (a long walk
+  // would otherwise merge every submap again at each new one).
+  const size_t kept = closed_merged_state_.size();
+  const bool extended = closed_merged_ && kept < closed.size() &&
+                        std::equal(closed_merged_state_.begin(), closed_merged_state_.end(), closed.begin());
+  if (extended) {
+    std::vector<st::PlacedMap> added{{closed_merged_.get(), Eigen::Isometry3d::Identity()}};
+    added.insert(added.end(), placed.begin() + static_cast<std::ptrdiff_t>(kept), placed.end());
+    closed_merged_ = std::make_unique<st::SparseTsdfMap>(st::mergeMaps(added));
+    closed_merged_state_ = std::move(closed);
+  } else if (!closed_merged_ || closed != closed_merged_state_) {
     closed_merged_ = std::make_unique<st::SparseTsdfMap>(st::mergeMaps(placed));
     closed_merged_state_ = std::move(closed);
   }
