@@ -145,4 +145,29 @@ SparseTsdfMap mergeMaps(const std::vector<PlacedMap>& parts) {
   return merged;
 }
 
+const SparseTsdfMap& GrowingMerge::update(const std::vector<Part>& parts) {
+  std::vector<State> states;
+  std::vector<PlacedMap> placed;
+  for (const Part& part : parts) {
+    states.push_back({part.identity, part.revision, part.placed.T_target_map.matrix()});
+    placed.push_back(part.placed);
+  }
+  const size_t kept = merged_states_.size();
+  if (merged_ && states == merged_states_) {
+    parts_merged_ = 0;
+    return *merged_;
+  }
+  if (merged_ && kept < states.size() && std::equal(merged_states_.begin(), merged_states_.end(), states.begin())) {
+    std::vector<PlacedMap> added{{merged_.get(), Eigen::Isometry3d::Identity()}};
+    added.insert(added.end(), placed.begin() + static_cast<std::ptrdiff_t>(kept), placed.end());
+    merged_ = std::make_unique<SparseTsdfMap>(mergeMaps(added));
+    parts_merged_ = states.size() - kept;
+  } else {
+    merged_ = std::make_unique<SparseTsdfMap>(mergeMaps(placed));
+    parts_merged_ = states.size();
+  }
+  merged_states_ = std::move(states);
+  return *merged_;
+}
+
 }  // namespace sdf_tracker

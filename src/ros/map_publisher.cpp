@@ -1,6 +1,5 @@
 #include "sdf_tracker/ros/map_publisher.h"
 
-#include <algorithm>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -196,32 +195,18 @@ bool MapPublisher::updateParts() {
 
 const st::TsdfMap& MapPublisher::wholeMap() {
   if (parts_.size() == 1 && parts_.front().T_W_part.matrix() == Eigen::Matrix4d::Identity()) return *parts_.front().copy;
-  // The submaps before the active one merged once, until one of them changes or moves (a new
-  // submap, a pose graph solution); each time only the active one is merged onto them.
-  std::vector<ClosedPartState> closed;
-  std::vector<st::PlacedMap> placed;
+  // The submaps before the active one merged once, until one of them changes or moves (a pose
+  // graph solution); a submap closed since is merged onto them, and each time the active one.
+  std::vector<st::GrowingMerge::Part> closed;
   for (size_t i = 0; i + 1 < parts_.size(); ++i) {
     const Part& part = parts_[i];
-    closed.push_back({part.copy->identity(), part.snapshot->syncedRevision(), part.T_W_part.matrix()});
-    placed.push_back({&static_cast<const st::SparseTsdfMap&>(*part.copy), part.T_W_part});
+    closed.push_back({{&static_cast<const st::SparseTsdfMap&>(*part.copy), part.T_W_part}, part.copy->identity(),
+                      part.snapshot->syncedRevision()});
   }
-  // A submap closed since, the others as they were: only it is added to the merge (a long walk
-  // would otherwise merge every submap again at each new one).
-  const size_t kept = closed_merged_state_.size();
-  const bool extended = closed_merged_ && kept < closed.size() &&
-                        std::equal(closed_merged_state_.begin(), closed_merged_state_.end(), closed.begin());
-  if (extended) {
-    std::vector<st::PlacedMap> added{{closed_merged_.get(), Eigen::Isometry3d::Identity()}};
-    added.insert(added.end(), placed.begin() + static_cast<std::ptrdiff_t>(kept), placed.end());
-    closed_merged_ = std::make_unique<st::SparseTsdfMap>(st::mergeMaps(added));
-    closed_merged_state_ = std::move(closed);
-  } else if (!closed_merged_ || closed != closed_merged_state_) {
-    closed_merged_ = std::make_unique<st::SparseTsdfMap>(st::mergeMaps(placed));
-    closed_merged_state_ = std::move(closed);
-  }
+  const st::SparseTsdfMap& closed_merged = closed_merge_.update(closed);
   const Part& active = parts_.back();
   merged_ = std::make_unique<st::SparseTsdfMap>(st::mergeMaps(
-      {{closed_merged_.get(), Eigen::Isometry3d::Identity()},
+      {{&closed_merged, Eigen::Isometry3d::Identity()},
        {&static_cast<const st::SparseTsdfMap&>(*active.copy), active.T_W_part}}));
   return *merged_;
 }

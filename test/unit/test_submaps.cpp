@@ -91,6 +91,55 @@ TEST(MapMerge, RefusesPartsOnAnotherLatticeNamingThem) {
   EXPECT_THROW(mergeMaps({{&a}, {nullptr}}), std::invalid_argument);
 }
 
+/// Every voxel of `expected` in `actual` (to float rounding), and no block besides.
+void expectSameMap(const SparseTsdfMap& actual, const SparseTsdfMap& expected, const std::string& what) {
+  EXPECT_EQ(actual.blockCount(), expected.blockCount()) << what;
+  int differing = 0;
+  expected.forEachBlock([&](const SparseTsdfMap::BlockIndex& index, const VoxelBlock& block) {
+    const VoxelBlock* other = actual.find(index);
+    for (int i = 0; i < kBlockVoxels; ++i) {
+      const Voxel& v = block.voxels[i];
+      const Voxel w = other ? other->voxels[i] : Voxel{0.0f, 0.0f};
+      differing += std::fabs(v.weight - w.weight) > 1e-5f ||
+                   (v.weight > 0.0f && std::fabs(v.distance_m - w.distance_m) > 1e-6f);
+    }
+  });
+  EXPECT_EQ(differing, 0) << what << ": voxels that differ from the merge of every part";
+}
+
+TEST(MapMerge, AGrowingMergeMergesOnlyThePartsAddedUntilOneChangesOrMoves) {
+  SparseTsdfMap a(sparseLattice()), b(sparseLattice()), c(sparseLattice());
+  for (int x = 0; x < 12; ++x) {
+    setVoxel(&a, {x, 1, 1}, {0.01f * x, 1.0f});
+    setVoxel(&b, {x + 4, 1, 1}, {-0.005f * x, 2.0f});
+    setVoxel(&c, {x + 8, 1, 2}, {0.002f * x, 0.5f});
+  }
+  Eigen::Isometry3d moved = Eigen::Isometry3d::Identity();
+  moved.translation() = Eigen::Vector3d(0.04, 0.0, 0.0);  // two voxels
+  auto part = [](const SparseTsdfMap& map, const Eigen::Isometry3d& T, uint64_t revision = 1) {
+    return GrowingMerge::Part{{&map, T}, map.identity(), revision};
+  };
+  const Eigen::Isometry3d I = Eigen::Isometry3d::Identity();
+  GrowingMerge merge;
+  expectSameMap(merge.update({part(a, I), part(b, moved)}), mergeMaps({{&a, I}, {&b, moved}}), "two parts");
+  EXPECT_EQ(merge.partsMerged(), 2u);
+  merge.update({part(a, I), part(b, moved)});
+  EXPECT_EQ(merge.partsMerged(), 0u) << "nothing changed";
+  expectSameMap(merge.update({part(a, I), part(b, moved), part(c, I)}), mergeMaps({{&a, I}, {&b, moved}, {&c, I}}),
+                "a part added");
+  EXPECT_EQ(merge.partsMerged(), 1u) << "only the part added";
+  expectSameMap(merge.update({part(a, I), part(b, I), part(c, I)}), mergeMaps({{&a, I}, {&b, I}, {&c, I}}),
+                "a part moved");
+  EXPECT_EQ(merge.partsMerged(), 3u) << "a part moved: all again";
+  setVoxel(&a, {0, 5, 5}, {0.03f, 1.0f});
+  expectSameMap(merge.update({part(a, I, 2), part(b, I), part(c, I)}), mergeMaps({{&a, I}, {&b, I}, {&c, I}}),
+                "a part changed");
+  EXPECT_EQ(merge.partsMerged(), 3u) << "a part changed: all again";
+  expectSameMap(merge.update({part(a, I, 2), part(c, I)}), mergeMaps({{&a, I}, {&c, I}}), "a part gone");
+  EXPECT_EQ(merge.partsMerged(), 2u);
+  EXPECT_THROW(merge.update({}), std::invalid_argument);
+}
+
 /// Fills voxels [x0, x1) x [0, 8) x [0, 8) with the plane x = offset_m at one weight.
 void fillPlane(SparseTsdfMap* map, int x0, int x1, float offset_m, float weight) {
   for (int z = 0; z < 8; ++z) {

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -33,5 +35,39 @@ inline void accumulate(const Voxel& voxel, Voxel* into) {
 /// have the same (throws std::invalid_argument naming the part that differs, or a null one).
 /// Throws std::invalid_argument as well for no parts.
 SparseTsdfMap mergeMaps(const std::vector<PlacedMap>& parts);
+
+/// mergeMaps() of a sequence of parts that grows at its end (a map's closed submaps, oldest
+/// first), kept from one call to the next: when the parts merged before are all still there, as
+/// they were (the same map, revision and place), only the parts after them are merged onto the
+/// kept result; any other change (a part changed, moved or gone: a pose graph solution) merges
+/// every part again.
+class GrowingMerge {
+ public:
+  /// A part, and what tells whether it changed since: its map's identity() and a revision of it
+  /// (the revision its content is at).
+  struct Part {
+    PlacedMap placed;
+    uint64_t identity = 0;
+    uint64_t revision = 0;
+  };
+  /// The parts merged, as mergeMaps() of them would be (to float rounding); valid until the next
+  /// call. Throws as mergeMaps() does (no parts, a part on another lattice).
+  const SparseTsdfMap& update(const std::vector<Part>& parts);
+  /// How many parts the last update() merged: all, or those added since the one before.
+  size_t partsMerged() const { return parts_merged_; }
+
+ private:
+  struct State {
+    uint64_t identity;
+    uint64_t revision;
+    Eigen::Matrix4d T_target_map;
+    bool operator==(const State& o) const {
+      return identity == o.identity && revision == o.revision && T_target_map == o.T_target_map;
+    }
+  };
+  std::vector<State> merged_states_;  ///< of the parts in merged_, in order
+  std::unique_ptr<SparseTsdfMap> merged_;
+  size_t parts_merged_ = 0;
+};
 
 }  // namespace sdf_tracker

@@ -14,6 +14,7 @@
 #include <std_msgs/Header.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include "sdf_tracker/map/map_merge.h"
 #include "sdf_tracker/map/tsdf_map.h"
 #include "sdf_tracker/surface/chunked_mesh.h"
 
@@ -106,18 +107,8 @@ class MapPublisher {
   std::function<std::vector<LiveMapPart>()> live_;
   std::vector<Part> parts_;
   std::unique_ptr<sdf_tracker::TsdfMap> merged_;  ///< wholeMap() of several parts
-  /// What the parts before the active one were when they were last merged into closed_merged_.
-  struct ClosedPartState {
-    uint64_t identity;
-    uint64_t revision;
-    Eigen::Matrix4d T_W_part;
-    bool operator==(const ClosedPartState& o) const {
-      return identity == o.identity && revision == o.revision && T_W_part == o.T_W_part;
-    }
-    bool operator!=(const ClosedPartState& o) const { return !(*this == o); }
-  };
-  std::vector<ClosedPartState> closed_merged_state_;
-  std::unique_ptr<sdf_tracker::SparseTsdfMap> closed_merged_;
+  /// The parts before the active one, merged (wholeMap()).
+  sdf_tracker::GrowingMerge closed_merge_;
   bool start_over_ = false;  ///< parts were dropped: the next ~mesh_blocks message starts over
   std::function<Eigen::Isometry3d()> T_map_W_;
   std::function<ros::Time()> stamp_;
