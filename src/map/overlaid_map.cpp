@@ -20,8 +20,16 @@ class OverlaidMap::Sampler final : public FieldSampler {
   Sampler(const OverlaidMap& map, const Eigen::AlignedBox3f& region_W)
       : map_(map), over_(map.over_, region_W), under_(map.under_, region_W) {}
   bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override {
-    return map_.sampleVia([&](Voxel(&c)[8], Eigen::Vector3f* f) { return over_.cellCorners(p_W, c, f); },
-                          [&](Voxel(&c)[8], Eigen::Vector3f* f) { return under_.cellCorners(p_W, c, f); }, out);
+    // One grid: the cell is found once for both maps.
+    SparseTsdfMap::Cell cell;
+    if (!map_.over_.cellAt(p_W, &cell)) return false;
+    return map_.sampleVia(
+        [&](Voxel(&c)[8], Eigen::Vector3f* f) {
+          over_.corners(cell, c);
+          *f = cell.fraction;
+          return true;
+        },
+        [&](Voxel(&c)[8], Eigen::Vector3f*) { under_.corners(cell, c); }, out);
   }
 
  private:

@@ -165,13 +165,8 @@ size_t SparseTsdfMap::memoryBytes() const {
 }
 
 template <typename FindBlock>
-bool SparseTsdfMap::cornersVia(const Eigen::Vector3f& p_W, Voxel (&corners)[8], Eigen::Vector3f* fraction,
-                               const FindBlock& findBlock) const {
-  const Eigen::Vector3f g = toLattice(p_W);
-  if (!withinReach(g)) return false;
-  const Eigen::Vector3f floor_g(std::floor(g.x()), std::floor(g.y()), std::floor(g.z()));
-  *fraction = g - floor_g;
-  const Eigen::Vector3i base = floor_g.cast<int>();
+void SparseTsdfMap::cornersVia(const Cell& cell, Voxel (&corners)[8], const FindBlock& findBlock) const {
+  const Eigen::Vector3i& base = cell.base;
   const Eigen::Vector3i local = localOf(base);
   const Voxel unobserved{positive_truncation_, 0.0f};
   if (local.maxCoeff() < kBlockSide - 1) {
@@ -179,7 +174,7 @@ bool SparseTsdfMap::cornersVia(const Eigen::Vector3f& p_W, Voxel (&corners)[8], 
     const VoxelBlock* block = findBlock(blockOf(base));
     if (!block) {
       std::fill(std::begin(corners), std::end(corners), unobserved);
-      return true;
+      return;
     }
     const Voxel* v = block->voxels.data() + VoxelBlock::index(local);
     constexpr int dy = kBlockSide, dz = kBlockSide * kBlockSide;
@@ -193,12 +188,24 @@ bool SparseTsdfMap::cornersVia(const Eigen::Vector3f& p_W, Voxel (&corners)[8], 
       corners[c] = block ? block->voxels[VoxelBlock::index(localOf(corner))] : unobserved;
     }
   }
+}
+
+bool SparseTsdfMap::cellAt(const Eigen::Vector3f& p_W, Cell* cell) const {
+  const Eigen::Vector3f g = toLattice(p_W);
+  if (!withinReach(g)) return false;
+  const Eigen::Vector3f floor_g(std::floor(g.x()), std::floor(g.y()), std::floor(g.z()));
+  cell->fraction = g - floor_g;
+  cell->base = floor_g.cast<int>();
   return true;
 }
 
 bool SparseTsdfMap::cellCorners(const Eigen::Vector3f& p_W, Voxel (&corners)[8], Eigen::Vector3f* fraction) const {
+  Cell cell;
+  if (!cellAt(p_W, &cell)) return false;
   // withinReach() held, so every block index is in key range.
-  return cornersVia(p_W, corners, fraction, [this](const BlockIndex& block) { return blocks_.find(keyOf(block)); });
+  cornersVia(cell, corners, [this](const BlockIndex& block) { return blocks_.find(keyOf(block)); });
+  *fraction = cell.fraction;
+  return true;
 }
 
 bool SparseTsdfMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
@@ -223,7 +230,15 @@ SparseTsdfMap::RegionReader::RegionReader(const SparseTsdfMap& map, const Eigen:
 
 bool SparseTsdfMap::RegionReader::cellCorners(const Eigen::Vector3f& p_W, Voxel (&corners)[8],
                                               Eigen::Vector3f* fraction) const {
-  return map_.cornersVia(p_W, corners, fraction, [this](const BlockIndex& block) { return find(block); });
+  Cell cell;
+  if (!map_.cellAt(p_W, &cell)) return false;
+  this->corners(cell, corners);
+  *fraction = cell.fraction;
+  return true;
+}
+
+void SparseTsdfMap::RegionReader::corners(const Cell& cell, Voxel (&corners)[8]) const {
+  map_.cornersVia(cell, corners, [this](const BlockIndex& block) { return find(block); });
 }
 
 bool SparseTsdfMap::RegionReader::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {

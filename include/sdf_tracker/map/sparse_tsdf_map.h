@@ -225,6 +225,14 @@ class SparseTsdfMap : public TsdfMap {
   /// where no block holds one), and p_W's place in the cell ([0, 1) per axis): what sample()
   /// interpolates. False outside the blocks' reach (withinReach).
   bool cellCorners(const Eigen::Vector3f& p_W, Voxel (&corners)[8], Eigen::Vector3f* fraction) const;
+  /// A cell of the lattice: the voxel at its lower corner, and where a point lies in it ([0, 1)
+  /// per axis). Maps of one grid (VolumeConfig::sameGrid) share their cells.
+  struct Cell {
+    Eigen::Vector3i base;
+    Eigen::Vector3f fraction;
+  };
+  /// The cell around p_W; false outside the blocks' reach (withinReach), as cellCorners().
+  bool cellAt(const Eigen::Vector3f& p_W, Cell* cell) const;
   class RegionReader;
   /// A RegionReader: samples in region_W need no hash lookup (about a block's table probe per
   /// sample saved).
@@ -245,10 +253,9 @@ class SparseTsdfMap : public TsdfMap {
   static constexpr int kLocalMask = kBlockSide - 1;
   static_assert(kBlockSide == 1 << kBlockShift, "kBlockSide must be 2^kBlockShift");
 
-  /// cellCorners() with the blocks found through findBlock(BlockIndex) -> const VoxelBlock*.
+  /// The corners of `cell` with the blocks found through findBlock(BlockIndex) -> const VoxelBlock*.
   template <typename FindBlock>
-  bool cornersVia(const Eigen::Vector3f& p_W, Voxel (&corners)[8], Eigen::Vector3f* fraction,
-                  const FindBlock& findBlock) const;
+  void cornersVia(const Cell& cell, Voxel (&corners)[8], const FindBlock& findBlock) const;
 
   BlockTable<VoxelBlock> blocks_;
   uint64_t revision_ = 0;
@@ -268,6 +275,9 @@ class SparseTsdfMap::RegionReader final : public FieldSampler {
   bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override;
   /// As SparseTsdfMap::cellCorners(), with the same result.
   bool cellCorners(const Eigen::Vector3f& p_W, Voxel (&corners)[8], Eigen::Vector3f* fraction) const;
+  /// The eight voxels of a cell (SparseTsdfMap::cellAt() of this map or one of its grid), as
+  /// cellCorners() gives them.
+  void corners(const Cell& cell, Voxel (&corners)[8]) const;
   const SparseTsdfMap& map() const { return map_; }
 
  private:
