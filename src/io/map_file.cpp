@@ -38,6 +38,8 @@ void writeMap(const std::string& path, const TsdfMap& map, const PlaceMemory* pl
   }
 }
 
+bool readsAsDenseGrid(const std::string& path) { return hasExtension(path, ".vti"); }
+
 std::unique_ptr<TsdfMap> readMap(const std::string& path, bool compact_voxels, std::unique_ptr<PlaceMemory>* places,
                                  const PlaceMemoryConfig& places_config, std::optional<Eigen::Isometry3d>* T_map_W) {
   if (places) places->reset();
@@ -55,7 +57,7 @@ std::unique_ptr<TsdfMap> readMap(const std::string& path, bool compact_voxels, s
     }
     return map;
   }
-  if (hasExtension(path, ".vti")) {
+  if (readsAsDenseGrid(path)) {
     auto map = std::make_unique<TsdfVolume>(readVti(path, compact_voxels));
     refuseEmpty(path, *map);
     return map;

@@ -20,16 +20,8 @@ class OverlaidMap::Sampler final : public FieldSampler {
   Sampler(const OverlaidMap& map, const Eigen::AlignedBox3f& region_W)
       : map_(map), over_(map.over_, region_W), under_(map.under_, region_W) {}
   bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override {
-    // One grid: the cell is found once for both maps.
-    SparseTsdfMap::Cell cell;
-    if (!map_.over_.cellAt(p_W, &cell)) return false;
-    return map_.sampleVia(
-        [&](Voxel(&c)[8], Eigen::Vector3f* f) {
-          over_.corners(cell, c);
-          *f = cell.fraction;
-          return true;
-        },
-        [&](Voxel(&c)[8], Eigen::Vector3f*) { under_.corners(cell, c); }, out);
+    return map_.sampleVia(p_W, [&](const SparseTsdfMap::Cell& cell, Voxel(&c)[8]) { over_.corners(cell, c); },
+                          [&](const SparseTsdfMap::Cell& cell, Voxel(&c)[8]) { under_.corners(cell, c); }, out);
   }
 
  private:
@@ -48,25 +40,28 @@ OverlaidMap::OverlaidMap(const SparseTsdfMap& over, const SparseTsdfMap& under, 
 }
 
 template <typename ReadOver, typename ReadUnder>
-bool OverlaidMap::sampleVia(const ReadOver& readOver, const ReadUnder& readUnder, FieldSample* out) const {
+bool OverlaidMap::sampleVia(const Eigen::Vector3f& p_W, const ReadOver& readOver, const ReadUnder& readUnder,
+                            FieldSample* out) const {
+  // One grid: the cell is found once for both maps.
+  SparseTsdfMap::Cell cell;
+  if (!over_.cellAt(p_W, &cell)) return false;  // outside the blocks' reach, for both
   Voxel over[8];
-  Eigen::Vector3f fraction;
-  if (!readOver(over, &fraction)) return false;  // outside the blocks' reach, for both (one lattice)
+  readOver(cell, over);
   bool settled = true;
   for (const Voxel& v : over) settled = settled && v.weight >= settled_weight_;
   if (!settled) {
     Voxel under[8];
-    readUnder(under, &fraction);
+    readUnder(cell, under);
     for (int c = 0; c < 8; ++c) {
       if (over[c].weight < settled_weight_) accumulate(under[c], &over[c]);  // else over's voxel stands
     }
   }
-  return interpolate(over, fraction, out);
+  return interpolate(over, cell.fraction, out);
 }
 
 bool OverlaidMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
-  return sampleVia([&](Voxel(&c)[8], Eigen::Vector3f* f) { return over_.cellCorners(p_W, c, f); },
-                   [&](Voxel(&c)[8], Eigen::Vector3f* f) { return under_.cellCorners(p_W, c, f); }, out);
+  return sampleVia(p_W, [&](const SparseTsdfMap::Cell& cell, Voxel(&c)[8]) { over_.corners(cell, c); },
+                   [&](const SparseTsdfMap::Cell& cell, Voxel(&c)[8]) { under_.corners(cell, c); }, out);
 }
 
 Eigen::AlignedBox3f OverlaidMap::holdableRegion() const {

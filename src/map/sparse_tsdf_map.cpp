@@ -202,10 +202,14 @@ bool SparseTsdfMap::cellAt(const Eigen::Vector3f& p_W, Cell* cell) const {
 bool SparseTsdfMap::cellCorners(const Eigen::Vector3f& p_W, Voxel (&corners)[8], Eigen::Vector3f* fraction) const {
   Cell cell;
   if (!cellAt(p_W, &cell)) return false;
-  // withinReach() held, so every block index is in key range.
-  cornersVia(cell, corners, [this](const BlockIndex& block) { return blocks_.find(keyOf(block)); });
+  this->corners(cell, corners);
   *fraction = cell.fraction;
   return true;
+}
+
+void SparseTsdfMap::corners(const Cell& cell, Voxel (&corners)[8]) const {
+  // cellAt() checked withinReach(), so every block index is in key range.
+  cornersVia(cell, corners, [this](const BlockIndex& block) { return blocks_.find(keyOf(block)); });
 }
 
 bool SparseTsdfMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {

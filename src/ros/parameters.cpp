@@ -4,7 +4,7 @@
 #include <map>
 #include <stdexcept>
 
-#include "sdf_tracker/io/files.h"
+#include "sdf_tracker/io/map_file.h"
 #include "sdf_tracker/ros/conversions.h"
 #include "sdf_tracker/util/validation.h"
 
@@ -172,7 +172,7 @@ void readParameters(const ros::NodeHandle& pnh, st::Settings* settings, NodeOpti
       options->tum_camera.empty() || !options->intrinsics_from_parameters,
       "~tum_camera (" + options->tum_camera + ") and FocalLength/CenterPoint both give the intrinsics: set one");
   for (const auto& entry : given) options->given_parameters.push_back(entry.first);
-  const bool loads_dense_map = st::io::hasExtension(options->load_volume, ".vti");
+  const bool loads_dense_map = st::io::readsAsDenseGrid(options->load_volume);
   if (const auto note = settings->keepToOneMapWhereNeeded(options->given_parameters, loads_dense_map)) {
     notes->push_back(*note);
   }

@@ -145,7 +145,7 @@ int run(int argc, char** argv) {
     }
     return 0;
   }
-  const bool loads_dense_map = st::io::hasExtension(args.get("load-volume", ""), ".vti");
+  const bool loads_dense_map = st::io::readsAsDenseGrid(args.get("load-volume", ""));
   if (const auto note = settings.keepToOneMapWhereNeeded(given, loads_dense_map)) std::cout << "note: " << *note << "\n";
   st::throwIfInvalid("parameters", settings.validate());
   for (const std::string& note : settings.withoutEffect(given)) std::cerr << "warning: --param " << note << "\n";

@@ -27,6 +27,10 @@ std::unique_ptr<TsdfMap> readMap(const std::string& path, bool compact_voxels = 
                                  const PlaceMemoryConfig& places_config = PlaceMemoryConfig(),
                                  std::optional<Eigen::Isometry3d>* T_map_W = nullptr);
 
+/// Whether readMap() reads `path` as a dense grid (a .vti), which holds no submaps: what the
+/// settings must know before the map is loaded.
+bool readsAsDenseGrid(const std::string& path);
+
 /// What a loaded map's place memory (readMap's `places`: none, or with its keyframes) brings for
 /// finding the camera in it, said after the file's name: "holds 12 keyframes in its place memory:
 /// the camera is searched for in it, ...", or that it holds none and why, and what Relocalise

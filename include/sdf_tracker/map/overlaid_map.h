@@ -36,9 +36,11 @@ class OverlaidMap final : public TsdfMap {
 
  private:
   class Sampler;
-  /// The overlay's rule for one cell, its voxels read through readOver/readUnder(corners, fraction).
+  /// The overlay's rule for the cell around p_W, its voxels read through readOver/readUnder(cell,
+  /// corners).
   template <typename ReadOver, typename ReadUnder>
-  bool sampleVia(const ReadOver& readOver, const ReadUnder& readUnder, FieldSample* out) const;
+  bool sampleVia(const Eigen::Vector3f& p_W, const ReadOver& readOver, const ReadUnder& readUnder,
+                 FieldSample* out) const;
 
   const SparseTsdfMap& over_;
   const SparseTsdfMap& under_;

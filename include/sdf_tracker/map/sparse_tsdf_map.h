@@ -233,6 +233,9 @@ class SparseTsdfMap : public TsdfMap {
   };
   /// The cell around p_W; false outside the blocks' reach (withinReach), as cellCorners().
   bool cellAt(const Eigen::Vector3f& p_W, Cell* cell) const;
+  /// The eight voxels of a cell (cellAt() of this map or one of its grid), as cellCorners() gives
+  /// them.
+  void corners(const Cell& cell, Voxel (&corners)[8]) const;
   class RegionReader;
   /// A RegionReader: samples in region_W need no hash lookup (about a block's table probe per
   /// sample saved).
