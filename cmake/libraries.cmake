@@ -33,7 +33,7 @@ sdf_tracker_part(pipeline SOURCES loop_closure parameters pipeline submaps track
 
 # Around the tracker: files (OpenCV for images only), the synthetic scenes, trajectory errors.
 sdf_tracker_part(io SOURCES colour_image_file depth_png files map_file mesh_file sdfmap_file trajectory_file tum_sequence vti_file
-  DEPENDS camera map surface places LINK ${OpenCV_LIBS})
+  DEPENDS camera map surface places pipeline LINK ${OpenCV_LIBS})
 target_include_directories(sdf_tracker_io SYSTEM PRIVATE ${OpenCV_INCLUDE_DIRS})
 sdf_tracker_part(sim SOURCES relocalisation_cases synthetic wheel_odometry DEPENDS io)
 sdf_tracker_part(eval SOURCES colour_agreement evaluation DEPENDS io)

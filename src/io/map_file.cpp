@@ -6,6 +6,7 @@
 #include "sdf_tracker/io/files.h"
 #include "sdf_tracker/io/sdfmap_file.h"
 #include "sdf_tracker/io/vti_file.h"
+#include "sdf_tracker/map/map_merge.h"
 #include "sdf_tracker/map/sparse_tsdf_map.h"
 #include "sdf_tracker/map/tsdf_volume.h"
 
@@ -38,37 +39,85 @@ void writeMap(const std::string& path, const TsdfMap& map, const PlaceMemory* pl
   }
 }
 
+void writeMap(const std::string& path, const SubmapGraph& saved, const PlaceMemory* places,
+              const std::optional<Eigen::Isometry3d>& T_map_W) {
+  const bool observed = std::any_of(saved.submaps.begin(), saved.submaps.end(),
+                                    [](const Submap& submap) { return submap.map && !submap.map->observesNothing(); });
+  if (!observed) throwFileError(path, "not written: nothing is mapped yet (no voxel holds an observation)");
+  if (hasExtension(path, ".sdfmap")) {
+    writeSubmaps(path, saved, places, T_map_W);
+  } else if (hasExtension(path, ".vti")) {
+    if (saved.submaps.size() == 1) return writeVti(path, toDenseVolume(*saved.submaps.front().map));
+    std::vector<PlacedMap> parts;
+    for (const Submap& submap : saved.submaps) {
+      parts.push_back({&static_cast<const SparseTsdfMap&>(*submap.map), submap.place.T_map_W});
+    }
+    writeVti(path, toDenseVolume(mergeMaps(parts)));
+  } else {
+    failUnknownMapExtension(path);
+  }
+}
+
 bool readsAsDenseGrid(const std::string& path) { return hasExtension(path, ".vti"); }
 
-std::unique_ptr<TsdfMap> readMap(const std::string& path, bool compact_voxels, std::unique_ptr<PlaceMemory>* places,
-                                 const PlaceMemoryConfig& places_config, std::optional<Eigen::Isometry3d>* T_map_W) {
-  if (places) places->reset();
-  if (T_map_W) T_map_W->reset();
+LoadedMap loadMap(const std::string& path, bool compact_voxels, const PlaceMemoryConfig& places_config) {
+  LoadedMap loaded;
   if (hasExtension(path, ".sdfmap")) {
-    std::optional<SavedPlaces> saved;
-    auto map = std::make_unique<SparseTsdfMap>(readSparseMap(path, places ? &saved : nullptr, T_map_W));
-    refuseEmpty(path, *map);
-    if (places && saved) {
+    SavedMap saved = readSubmaps(path);
+    const bool observed = std::any_of(saved.submaps.submaps.begin(), saved.submaps.submaps.end(),
+                                      [](const Submap& submap) { return !submap.map->observesNothing(); });
+    if (!observed) refuseEmpty(path, *saved.submaps.submaps.front().map);
+    if (saved.places) {
       PlaceMemoryConfig config = places_config;
-      config.descriptor = saved->descriptor;
-      config.max_keyframes = std::max<int>(config.max_keyframes, static_cast<int>(saved->keyframes.size()));
-      *places = std::make_unique<PlaceMemory>(config);
-      for (Keyframe& keyframe : saved->keyframes) (*places)->add(std::move(keyframe));
+      config.descriptor = saved.places->descriptor;
+      config.max_keyframes = std::max<int>(config.max_keyframes, static_cast<int>(saved.places->keyframes.size()));
+      loaded.places = std::make_unique<PlaceMemory>(config);
+      for (Keyframe& keyframe : saved.places->keyframes) loaded.places->add(std::move(keyframe));
     }
-    return map;
+    loaded.submaps = std::move(saved.submaps);
+    loaded.T_map_W = saved.T_map_W;
+    return loaded;
   }
   if (readsAsDenseGrid(path)) {
     auto map = std::make_unique<TsdfVolume>(readVti(path, compact_voxels));
     refuseEmpty(path, *map);
-    return map;
+    loaded.submaps.submaps.push_back(Submap{std::move(map), SubmapPlace()});
+    return loaded;
   }
   failUnknownMapExtension(path);
+}
+
+std::unique_ptr<TsdfMap> readMap(const std::string& path, bool compact_voxels, std::unique_ptr<PlaceMemory>* places,
+                                 const PlaceMemoryConfig& places_config, std::optional<Eigen::Isometry3d>* T_map_W) {
+  LoadedMap loaded = loadMap(path, compact_voxels, places_config);
+  if (places) {
+    places->reset();
+    if (loaded.places) *places = loaded.submaps.placesInMapFrame(*loaded.places);
+  }
+  if (T_map_W) *T_map_W = loaded.T_map_W;
+  return mergeSubmaps(std::move(loaded.submaps.submaps));
 }
 
 std::string describeLoadedColour(const TsdfMap& map, bool colour_on) {
   if (!colour_on || map.holdsColour()) return "";
   return "holds no colour (a .sdfmap before format version 4, or a map made without colour): what it holds shows "
          "grey until the camera sees it in colour";
+}
+
+std::string describeLoadedSubmaps(const SubmapGraph& saved, const PipelineConfig& config) {
+  if (saved.submaps.size() <= 1) return "";
+  const auto loops = std::count_if(saved.edges.begin(), saved.edges.end(),
+                                   [](const PoseEdge& edge) { return edge.kind == PoseEdgeKind::kLoop; });
+  const std::string held = "holds " + std::to_string(saved.submaps.size()) + " submaps joined by " +
+                           std::to_string(saved.edges.size()) + " edges (" + std::to_string(loops) +
+                           (loops == 1 ? " loop)" : " loops)");
+  if (SdfPipeline::keepsSubmaps(config, saved)) {
+    return held + ": kept as submaps; the submap where the camera is found joins their pose graph";
+  }
+  return held + ": merged into one map, as " +
+         (config.submaps.enabled() ? std::string("Relocalise=false (no search to find the camera in them)")
+                                   : std::string("SubmapSize=0 (one map)")) +
+         " makes it";
 }
 
 std::string describeLoadedPlaces(const PlaceMemory* places, bool relocalise) {

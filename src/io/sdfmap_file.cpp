@@ -30,11 +30,12 @@ class Fnv1a {
 };
 
 constexpr char kMapMagic[8] = {'S', 'D', 'F', 'T', 'M', 'A', 'P', '\n'};
-constexpr uint32_t kMapVersion = 4;
+constexpr uint32_t kMapVersion = 5;
 constexpr uint32_t kFirstMapVersion = 1;  ///< no place memory
 constexpr uint32_t kPlacesVersion = 2;    ///< from this version on: the place memory
 constexpr uint32_t kMapFrameVersion = 3;  ///< from this version on: the map frame
 constexpr uint32_t kColourVersion = 4;    ///< from this version on: the colour flag (and colours)
+constexpr uint32_t kSubmapsVersion = 5;   ///< from this version on: submaps, their graph, each keyframe's submap
 
 /// The header of a .sdfmap file, field by field as stored.
 #pragma pack(push, 1)
@@ -76,9 +77,32 @@ struct MapFrameRecord {
 struct ColourRecord {
   uint64_t holds_colour;
 };
+/// Version 5's counts, right after ColourRecord: the submaps' records, then the edges', follow.
+struct SubmapsRecord {
+  uint64_t submap_count;
+  uint64_t edge_count;
+};
+/// A submap's place and how many of the blocks (in submap order) are its.
+struct SubmapRecord {
+  KeyframePose T_W_anchor;
+  KeyframePose T_map_W;
+  uint64_t block_count;
+  int64_t frames_fused;
+  double path_m;
+};
+/// A pose graph edge: where `to` lies in `from`'s frame, and its information (row-major).
+struct EdgeRecord {
+  int32_t from;
+  int32_t to;
+  uint32_t kind;  ///< 0 odometry, 1 loop
+  uint32_t reserved;
+  KeyframePose T_from_to;
+  double information[36];
+};
 #pragma pack(pop)
 static_assert(sizeof(MapFileHeader) == 64 && sizeof(PlacesHeader) == 48 && sizeof(KeyframePose) == 56 &&
-                  sizeof(MapFrameRecord) == 64 && sizeof(ColourRecord) == 8 && sizeof(Voxel) == 8 &&
+                  sizeof(MapFrameRecord) == 64 && sizeof(ColourRecord) == 8 && sizeof(SubmapsRecord) == 16 &&
+                  sizeof(SubmapRecord) == 136 && sizeof(EdgeRecord) == 360 && sizeof(Voxel) == 8 &&
                   sizeof(VoxelColour) == 4,
               "the .sdfmap layout is fixed");
 constexpr size_t kBlockColourBytes = kBlockVoxels * sizeof(VoxelColour);
@@ -141,25 +165,62 @@ std::string keyframeProblem(const KeyframePose& pose, const uint8_t* code, const
   return "";
 }
 
-}  // namespace
+/// Why a saved edge cannot be one of the graph ("" when it can; the nodes are checked with the
+/// submaps, SubmapGraph::problem).
+std::string edgeProblem(const EdgeRecord& edge) {
+  if (edge.kind > 1) return "kind " + std::to_string(edge.kind) + " is neither 0 (odometry) nor 1 (loop)";
+  if (std::string problem = poseProblem(edge.T_from_to); !problem.empty()) return problem;
+  const Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> information(edge.information);
+  if (!information.allFinite()) return "information holds a value that is not finite";
+  if (!information.isApprox(information.transpose(), 1e-9)) return "information is not symmetric";
+  if (Eigen::LLT<Eigen::Matrix<double, 6, 6>>(information).info() != Eigen::Success) {
+    return "information is not positive definite";
+  }
+  return "";
+}
 
-void writeSparseMap(const std::string& path, const SparseTsdfMap& map, const PlaceMemory* places,
-                    const std::optional<Eigen::Isometry3d>& T_map_W) {
+/// A submap to write: its blocks and its place.
+struct SubmapToWrite {
+  const SparseTsdfMap* map;
+  SubmapPlace place;
+};
+
+/// Writes version 5 (see the header).
+void writeVersion5(const std::string& path, const std::vector<SubmapToWrite>& submaps, const std::vector<PoseEdge>& edges,
+                   const std::vector<int>& keyframe_submaps, const PlaceMemory* places,
+                   const std::optional<Eigen::Isometry3d>& T_map_W) {
+  const SparseTsdfMap& first = *submaps.front().map;
+  bool holds_colour = false;
+  std::vector<std::vector<SparseTsdfMap::BlockIndex>> indices;
+  uint64_t blocks = 0;
+  for (size_t i = 0; i < submaps.size(); ++i) {
+    if (!submaps[i].map->config().sameLattice(first.config())) {
+      throwFileError(path, "not written: submap " + std::to_string(i) + " has another lattice than submap 0");
+    }
+    holds_colour = holds_colour || submaps[i].map->holdsColour();
+    indices.push_back(submaps[i].map->blockIndices());
+    blocks += indices.back().size();
+  }
+  const size_t keyframes = places ? places->keyframes().size() : 0;
+  if (keyframe_submaps.size() != keyframes) {
+    throwFileError(path, "not written: " + std::to_string(keyframe_submaps.size()) + " keyframes' submaps for " +
+                             std::to_string(keyframes) + " keyframes");
+  }
   MapFileHeader header;
   std::memcpy(header.magic, kMapMagic, sizeof(kMapMagic));
   header.version = kMapVersion;
   header.block_side = kBlockSide;
-  header.voxel_size_m = map.config().voxel_size_m;
-  header.positive_truncation_m = map.config().positive_truncation_m;
-  for (int axis = 0; axis < 3; ++axis) header.origin_W[axis] = map.config().origin_W[axis];
-  const std::vector<SparseTsdfMap::BlockIndex> indices = map.blockIndices();
-  header.block_count = indices.size();
-  const PlacesHeader places_header = placesHeaderOf(places ? places->config().descriptor : PlaceDescriptorConfig(),
-                                                   places ? places->keyframes().size() : 0);
+  header.voxel_size_m = first.config().voxel_size_m;
+  header.positive_truncation_m = first.config().positive_truncation_m;
+  for (int axis = 0; axis < 3; ++axis) header.origin_W[axis] = first.config().origin_W[axis];
+  header.block_count = blocks;
+  const PlacesHeader places_header =
+      placesHeaderOf(places ? places->config().descriptor : PlaceDescriptorConfig(), keyframes);
   MapFrameRecord map_frame{};
   map_frame.known = T_map_W ? 1 : 0;
   map_frame.T_map_W = poseRecordOf(T_map_W.value_or(Eigen::Isometry3d::Identity()));
-  const ColourRecord colour{map.holdsColour() ? 1u : 0u};
+  const ColourRecord colour{holds_colour ? 1u : 0u};
+  const SubmapsRecord counts{submaps.size(), edges.size()};
 
   AtomicOutput out(path);
   Fnv1a hash;
@@ -171,28 +232,69 @@ void writeSparseMap(const std::string& path, const SparseTsdfMap& map, const Pla
   put(&places_header, sizeof(places_header));
   put(&map_frame, sizeof(map_frame));
   put(&colour, sizeof(colour));
-  auto record = std::make_unique<MapFileBlock>();
-  for (const SparseTsdfMap::BlockIndex& index : indices) {
-    for (int axis = 0; axis < 3; ++axis) record->index[axis] = index[axis];
-    const VoxelBlock& block = *map.find(index);
-    std::copy(block.voxels.begin(), block.voxels.end(), record->voxels);
-    put(record.get(), sizeof(MapFileBlock));
-    if (colour.holds_colour) put(block.colours.data(), kBlockColourBytes);
+  put(&counts, sizeof(counts));
+  for (size_t i = 0; i < submaps.size(); ++i) {
+    const SubmapPlace& place = submaps[i].place;
+    const SubmapRecord submap{poseRecordOf(place.T_W_anchor), poseRecordOf(place.T_map_W), indices[i].size(),
+                              place.frames_fused, place.path_m};
+    put(&submap, sizeof(submap));
   }
-  if (places) {
-    for (const Keyframe& keyframe : places->keyframes()) {
-      const KeyframePose pose = poseRecordOf(keyframe.T_W_C);
-      put(&pose, sizeof(pose));
-      put(keyframe.code.data(), keyframe.code.size());
+  for (const PoseEdge& edge : edges) {
+    EdgeRecord record{edge.from, edge.to, edge.kind == PoseEdgeKind::kLoop ? 1u : 0u, 0u, poseRecordOf(edge.T_from_to), {}};
+    Eigen::Map<Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(record.information) = edge.information;
+    put(&record, sizeof(record));
+  }
+  auto record = std::make_unique<MapFileBlock>();
+  const VoxelColour no_colour[kBlockVoxels] = {};
+  for (size_t i = 0; i < submaps.size(); ++i) {
+    for (const SparseTsdfMap::BlockIndex& index : indices[i]) {
+      for (int axis = 0; axis < 3; ++axis) record->index[axis] = index[axis];
+      const VoxelBlock& block = *submaps[i].map->find(index);
+      std::copy(block.voxels.begin(), block.voxels.end(), record->voxels);
+      put(record.get(), sizeof(MapFileBlock));
+      if (holds_colour) put(submaps[i].map->holdsColour() ? block.colours.data() : no_colour, kBlockColourBytes);
     }
+  }
+  for (size_t k = 0; k < keyframes; ++k) {
+    const Keyframe& keyframe = places->keyframes()[k];
+    const KeyframePose pose = poseRecordOf(keyframe.T_W_C);
+    put(&pose, sizeof(pose));
+    put(keyframe.code.data(), keyframe.code.size());
+    const int32_t submap = keyframe_submaps[k];
+    put(&submap, sizeof(submap));
   }
   const uint64_t checksum = hash.value();
   out.stream().write(reinterpret_cast<const char*>(&checksum), sizeof(checksum));
   out.commit();
 }
 
-SparseTsdfMap readSparseMap(const std::string& path, std::optional<SavedPlaces>* places,
-                            std::optional<Eigen::Isometry3d>* T_map_W) {
+}  // namespace
+
+void writeSparseMap(const std::string& path, const SparseTsdfMap& map, const PlaceMemory* places,
+                    const std::optional<Eigen::Isometry3d>& T_map_W) {
+  const size_t keyframes = places ? places->keyframes().size() : 0;
+  writeVersion5(path, {SubmapToWrite{&map, SubmapPlace()}}, {}, std::vector<int>(keyframes, 0), places, T_map_W);
+}
+
+void writeSubmaps(const std::string& path, const SubmapGraph& saved, const PlaceMemory* places,
+                  const std::optional<Eigen::Isometry3d>& T_map_W) {
+  if (const std::string problem = saved.problem(places ? places->keyframes().size() : 0); !problem.empty()) {
+    throwFileError(path, "not written: " + problem);
+  }
+  std::optional<SparseTsdfMap> grid_as_blocks;  // a dense grid, alone, is stored as its observed blocks
+  std::vector<SubmapToWrite> submaps;
+  for (const Submap& submap : saved.submaps) {
+    if (submap.map->type() == MapType::kSparse) {
+      submaps.push_back({&static_cast<const SparseTsdfMap&>(*submap.map), submap.place});
+    } else {
+      grid_as_blocks = toSparseMap(*submap.map);
+      submaps.push_back({&*grid_as_blocks, submap.place});
+    }
+  }
+  writeVersion5(path, submaps, saved.edges, saved.keyframe_submaps, places, T_map_W);
+}
+
+SavedMap readSubmaps(const std::string& path) {
   uint64_t file_bytes = 0;
   std::ifstream in = openForReading(path, &file_bytes);
   MapFileHeader header;
@@ -218,32 +320,34 @@ SparseTsdfMap readSparseMap(const std::string& path, std::optional<SavedPlaces>*
   }
   Fnv1a hash;
   hash.add(&header, sizeof(header));
+  uint64_t headers = sizeof(header);
+  // Reads a fixed record that the version holds, hashed.
+  auto readRecord = [&](void* record, size_t bytes, const char* where) {
+    headers += bytes;
+    if (file_bytes < headers || !in.read(static_cast<char*>(record), static_cast<std::streamsize>(bytes))) {
+      throwFileError(path, std::string("truncated in ") + where);
+    }
+    hash.add(record, bytes);
+  };
   // Version 2: the place memory's header, and what its keyframes take.
   PlacesHeader places_header{};
   PlaceDescriptorConfig descriptor;
   uint64_t keyframe_bytes = 0;
   const bool has_places = header.version >= kPlacesVersion;
+  const bool has_submaps = header.version >= kSubmapsVersion;
   if (has_places) {
-    if (file_bytes < sizeof(header) + sizeof(places_header) ||
-        !in.read(reinterpret_cast<char*>(&places_header), sizeof(places_header))) {
-      throwFileError(path, "truncated in the place memory's header");
-    }
-    hash.add(&places_header, sizeof(places_header));
+    readRecord(&places_header, sizeof(places_header), "the place memory's header");
     descriptor = descriptorOf(places_header);
     if (const auto violations = descriptor.validate(); !violations.empty()) {
       throwFileError(path, "invalid place descriptor: " + violations.front());
     }
-    keyframe_bytes = sizeof(KeyframePose) + static_cast<uint64_t>(descriptor.fern_count);
+    keyframe_bytes = sizeof(KeyframePose) + static_cast<uint64_t>(descriptor.fern_count) +
+                     (has_submaps ? sizeof(int32_t) : 0);
   }
   // Version 3: the map frame.
   MapFrameRecord map_frame{};
-  const bool has_map_frame = header.version >= kMapFrameVersion;
-  if (has_map_frame) {
-    if (file_bytes < sizeof(header) + sizeof(places_header) + sizeof(map_frame) ||
-        !in.read(reinterpret_cast<char*>(&map_frame), sizeof(map_frame))) {
-      throwFileError(path, "truncated in the map frame");
-    }
-    hash.add(&map_frame, sizeof(map_frame));
+  if (header.version >= kMapFrameVersion) {
+    readRecord(&map_frame, sizeof(map_frame), "the map frame");
     if (map_frame.known > 1) throwFileError(path, "map frame: flag " + std::to_string(map_frame.known) + " is neither 0 nor 1");
     if (map_frame.known == 1) {
       if (const std::string problem = poseProblem(map_frame.T_map_W); !problem.empty()) {
@@ -253,99 +357,172 @@ SparseTsdfMap readSparseMap(const std::string& path, std::optional<SavedPlaces>*
   }
   // Version 4: whether colours follow the blocks.
   ColourRecord colour{0};
-  const bool has_colour_flag = header.version >= kColourVersion;
-  if (has_colour_flag) {
-    if (file_bytes < sizeof(header) + sizeof(places_header) + sizeof(map_frame) + sizeof(colour) ||
-        !in.read(reinterpret_cast<char*>(&colour), sizeof(colour))) {
-      throwFileError(path, "truncated in the colour flag");
-    }
-    hash.add(&colour, sizeof(colour));
+  if (header.version >= kColourVersion) {
+    readRecord(&colour, sizeof(colour), "the colour flag");
     if (colour.holds_colour > 1) {
       throwFileError(path, "colour flag " + std::to_string(colour.holds_colour) + " is neither 0 nor 1");
     }
   }
-  // The length must match the counts exactly before anything is allocated for blocks or keyframes.
+  // Version 5: how many submaps and edges (before: one submap, no edge).
+  SubmapsRecord counts{1, 0};
+  if (has_submaps) readRecord(&counts, sizeof(counts), "the submap count");
+  const uint64_t submap_record_bytes = has_submaps ? sizeof(SubmapRecord) : 0;
+  // The length must match the counts exactly before anything is allocated for blocks, submaps or
+  // keyframes. In 64 bits the sum may wrap for counts no file could hold: say so rather than a
+  // wrong size.
   const uint64_t block_bytes = sizeof(MapFileBlock) + (colour.holds_colour ? kBlockColourBytes : 0);
-  const uint64_t headers = sizeof(header) + (has_places ? sizeof(places_header) : 0) +
-                           (has_map_frame ? sizeof(map_frame) : 0) + (has_colour_flag ? sizeof(colour) : 0);
   const uint64_t payload = file_bytes - headers;
-  // In 64 bits the sum may wrap for counts no file could hold: say so rather than a wrong size.
-  const uint64_t limit = UINT64_MAX / 4;
+  const uint64_t limit = UINT64_MAX / 8;
   const bool representable = header.block_count < limit / block_bytes &&
-                             (keyframe_bytes == 0 || places_header.keyframe_count < limit / keyframe_bytes);
+                             (keyframe_bytes == 0 || places_header.keyframe_count < limit / keyframe_bytes) &&
+                             counts.submap_count < limit / sizeof(SubmapRecord) &&
+                             counts.edge_count < limit / sizeof(EdgeRecord);
   const uint64_t expected = representable ? header.block_count * block_bytes +
-                                                places_header.keyframe_count * keyframe_bytes + sizeof(uint64_t)
+                                                places_header.keyframe_count * keyframe_bytes +
+                                                counts.submap_count * submap_record_bytes +
+                                                counts.edge_count * sizeof(EdgeRecord) + sizeof(uint64_t)
                                           : 0;
   if (!representable || payload != expected) {
     std::string listed = std::to_string(header.block_count) + " blocks";
-    if (has_places) listed += " and " + std::to_string(places_header.keyframe_count) + " keyframes";
+    if (has_places) listed += (has_submaps ? ", " : " and ") + std::to_string(places_header.keyframe_count) + " keyframes";
+    if (has_submaps) {
+      listed += ", " + std::to_string(counts.submap_count) + " submaps and " + std::to_string(counts.edge_count) + " edges";
+    }
     throwFileError(path, "its header lists " + listed + " (" +
-                             (representable ? std::to_string(expected) : std::string("more than 2^62")) +
+                             (representable ? std::to_string(expected) : std::string("more than 2^60")) +
                              " bytes after the header) but the file holds " + std::to_string(payload) +
                              " bytes after the header: truncated or not written by this package");
   }
+  if (counts.submap_count == 0) throwFileError(path, "it lists no submap");
 
-  SparseTsdfMap map(config);
-  if (colour.holds_colour) map.enableColour();
+  SavedMap saved;
+  std::vector<uint64_t> submap_blocks;
+  if (has_submaps) {
+    uint64_t blocks_listed = 0;
+    for (uint64_t i = 0; i < counts.submap_count; ++i) {
+      SubmapRecord record;
+      if (!in.read(reinterpret_cast<char*>(&record), sizeof(record))) throwFileError(path, "read failed in submap " + std::to_string(i));
+      hash.add(&record, sizeof(record));
+      const std::string name = "submap " + std::to_string(i);
+      for (const auto& [pose, what] : {std::pair{&record.T_W_anchor, "anchor"}, std::pair{&record.T_map_W, "place"}}) {
+        if (const std::string problem = poseProblem(*pose); !problem.empty()) throwFileError(path, name + ": " + what + ": " + problem);
+      }
+      if (record.block_count > header.block_count - blocks_listed) {
+        throwFileError(path, name + " lists " + std::to_string(record.block_count) + " blocks, beyond the " +
+                                 std::to_string(header.block_count) + " of the file");
+      }
+      blocks_listed += record.block_count;
+      if (record.frames_fused < 0 || record.frames_fused > INT32_MAX) {
+        throwFileError(path, name + ": " + std::to_string(record.frames_fused) + " frames fused");
+      }
+      if (!std::isfinite(record.path_m) || record.path_m < 0.0 || record.path_m > 1e9) {
+        throwFileError(path, name + ": path of " + std::to_string(record.path_m) + " m");
+      }
+      SubmapPlace place;
+      place.T_W_anchor = poseOf(record.T_W_anchor);
+      place.T_map_W = poseOf(record.T_map_W);
+      place.node = static_cast<int>(i);
+      place.frames_fused = static_cast<int>(record.frames_fused);
+      place.path_m = record.path_m;
+      saved.submaps.submaps.push_back(Submap{nullptr, place});
+      submap_blocks.push_back(record.block_count);
+    }
+    if (blocks_listed != header.block_count) {
+      throwFileError(path, "its submaps list " + std::to_string(blocks_listed) + " blocks, its header " +
+                               std::to_string(header.block_count));
+    }
+    for (uint64_t e = 0; e < counts.edge_count; ++e) {
+      EdgeRecord record;
+      if (!in.read(reinterpret_cast<char*>(&record), sizeof(record))) throwFileError(path, "read failed in edge " + std::to_string(e));
+      hash.add(&record, sizeof(record));
+      if (const std::string problem = edgeProblem(record); !problem.empty()) {
+        throwFileError(path, "edge " + std::to_string(e) + ": " + problem);
+      }
+      PoseEdge edge;
+      edge.from = record.from;
+      edge.to = record.to;
+      edge.kind = record.kind == 1 ? PoseEdgeKind::kLoop : PoseEdgeKind::kOdometry;
+      edge.T_from_to = poseOf(record.T_from_to);
+      edge.information = Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(record.information);
+      saved.submaps.edges.push_back(edge);
+    }
+  } else {
+    saved.submaps.submaps.push_back(Submap{nullptr, SubmapPlace()});
+    submap_blocks.push_back(header.block_count);
+  }
+
   auto record = std::make_unique<MapFileBlock>();
+  uint64_t b = 0;  // over all submaps, as the messages count them
   try {
-    for (uint64_t b = 0; b < header.block_count; ++b) {
-      if (!in.read(reinterpret_cast<char*>(record.get()), sizeof(MapFileBlock))) {
-        throwFileError(path, "read failed in block " + std::to_string(b));
-      }
-      hash.add(record.get(), sizeof(MapFileBlock));
-      const SparseTsdfMap::BlockIndex index(record->index[0], record->index[1], record->index[2]);
-      std::ostringstream where;
-      where << "block " << b << " at (" << index.transpose() << ")";
-      if (!SparseTsdfMap::inKeyRange(index)) throwFileError(path, where.str() + " lies beyond the map's reach");
-      if (map.find(index)) throwFileError(path, where.str() + " appears twice");
-      for (int v = 0; v < kBlockVoxels; ++v) {
-        const std::string problem = voxelProblem(record->voxels[v], config.positive_truncation_m);
-        if (!problem.empty()) throwFileError(path, where.str() + ", voxel " + std::to_string(v) + ": " + problem);
-      }
-      VoxelBlock& block = map.allocate(index);
-      std::copy(record->voxels, record->voxels + kBlockVoxels, block.voxels.begin());
-      if (colour.holds_colour) {
-        if (!in.read(reinterpret_cast<char*>(block.colours.data()), kBlockColourBytes)) {
-          throwFileError(path, "read failed in the colours of block " + std::to_string(b));
+    for (size_t i = 0; i < submap_blocks.size(); ++i) {
+      auto map = std::make_unique<SparseTsdfMap>(config);
+      if (colour.holds_colour) map->enableColour();
+      for (uint64_t end = b + submap_blocks[i]; b < end; ++b) {
+        if (!in.read(reinterpret_cast<char*>(record.get()), sizeof(MapFileBlock))) {
+          throwFileError(path, "read failed in block " + std::to_string(b));
         }
-        hash.add(block.colours.data(), kBlockColourBytes);
+        hash.add(record.get(), sizeof(MapFileBlock));
+        const SparseTsdfMap::BlockIndex index(record->index[0], record->index[1], record->index[2]);
+        std::ostringstream where;
+        where << "block " << b << " at (" << index.transpose() << ")";
+        if (has_submaps) where << " of submap " << i;
+        if (!SparseTsdfMap::inKeyRange(index)) throwFileError(path, where.str() + " lies beyond the map's reach");
+        if (map->find(index)) throwFileError(path, where.str() + " appears twice");
+        for (int v = 0; v < kBlockVoxels; ++v) {
+          const std::string problem = voxelProblem(record->voxels[v], config.positive_truncation_m);
+          if (!problem.empty()) throwFileError(path, where.str() + ", voxel " + std::to_string(v) + ": " + problem);
+        }
+        VoxelBlock& block = map->allocate(index);
+        std::copy(record->voxels, record->voxels + kBlockVoxels, block.voxels.begin());
+        if (colour.holds_colour) {
+          if (!in.read(reinterpret_cast<char*>(block.colours.data()), kBlockColourBytes)) {
+            throwFileError(path, "read failed in the colours of block " + std::to_string(b));
+          }
+          hash.add(block.colours.data(), kBlockColourBytes);
+        }
       }
+      saved.submaps.submaps[i].map = std::move(map);
     }
   } catch (const std::bad_alloc&) {
     throwFileError(path, "not enough memory for its " + std::to_string(header.block_count) + " blocks");
   }
-  SavedPlaces saved;
-  saved.descriptor = descriptor;
+  SavedPlaces places;
+  places.descriptor = descriptor;
   std::vector<uint8_t> code(static_cast<size_t>(has_places ? descriptor.fern_count : 0));
   for (uint64_t k = 0; k < places_header.keyframe_count; ++k) {
     KeyframePose pose;
+    int32_t submap = 0;
     if (!in.read(reinterpret_cast<char*>(&pose), sizeof(pose)) ||
-        !in.read(reinterpret_cast<char*>(code.data()), static_cast<std::streamsize>(code.size()))) {
+        !in.read(reinterpret_cast<char*>(code.data()), static_cast<std::streamsize>(code.size())) ||
+        (has_submaps && !in.read(reinterpret_cast<char*>(&submap), sizeof(submap)))) {
       throwFileError(path, "read failed in keyframe " + std::to_string(k));
     }
     hash.add(&pose, sizeof(pose));
     hash.add(code.data(), code.size());
+    if (has_submaps) hash.add(&submap, sizeof(submap));
     const std::string problem = keyframeProblem(pose, code.data(), descriptor);
     if (!problem.empty()) throwFileError(path, "keyframe " + std::to_string(k) + ": " + problem);
     Keyframe keyframe;
     keyframe.T_W_C = poseOf(pose);
     keyframe.code = code;
-    saved.keyframes.push_back(std::move(keyframe));
+    places.keyframes.push_back(std::move(keyframe));
+    saved.submaps.keyframe_submaps.push_back(submap);
   }
   uint64_t checksum = 0;
   if (!in.read(reinterpret_cast<char*>(&checksum), sizeof(checksum)) || checksum != hash.value()) {
     throwFileError(path, "checksum mismatch: the file is corrupt");
   }
-  if (places) {
-    places->reset();
-    if (has_places) *places = std::move(saved);
+  if (const std::string problem = saved.submaps.problem(places.keyframes.size()); !problem.empty()) {
+    throwFileError(path, problem);
   }
-  if (T_map_W) {
-    T_map_W->reset();
-    if (map_frame.known == 1) *T_map_W = poseOf(map_frame.T_map_W);
-  }
-  return map;
+  if (has_places) saved.places = std::move(places);
+  if (map_frame.known == 1) saved.T_map_W = poseOf(map_frame.T_map_W);
+  return saved;
+}
+
+SparseTsdfMap readSparseMap(const std::string& path) {
+  std::unique_ptr<TsdfMap> merged = mergeSubmaps(std::move(readSubmaps(path).submaps.submaps));
+  return std::move(static_cast<SparseTsdfMap&>(*merged));
 }
 
 }  // namespace sdf_tracker::io

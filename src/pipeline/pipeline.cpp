@@ -1,5 +1,6 @@
 #include "sdf_tracker/pipeline/pipeline.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -203,7 +204,61 @@ void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemo
   budget_ = makeBudget(config_, map_->type());
   places_ = places ? std::move(places) : std::make_unique<PlaceMemory>(config_.places);
   keyframe_submaps_.assign(places_->keyframes().size(), 0);
-  T_W_C_ = T_W_C_last_fused_ = Eigen::Isometry3d::Identity();
+  startInLoadedMap(Eigen::Isometry3d::Identity());
+}
+
+void SdfPipeline::setSubmaps(SubmapGraph saved, std::unique_ptr<PlaceMemory> places, bool one_map_for_grid) {
+  const size_t keyframes = places ? places->keyframes().size() : 0;
+  if (!places) saved.keyframe_submaps.clear();
+  if (const std::string problem = saved.problem(keyframes); !problem.empty()) {
+    throw std::invalid_argument("the saved submaps: " + problem);
+  }
+  if (!keepsSubmaps(config_, saved)) {
+    std::unique_ptr<PlaceMemory> moved = places ? saved.placesInMapFrame(*places) : nullptr;
+    return setMap(mergeSubmaps(std::move(saved.submaps)), std::move(moved), one_map_for_grid);
+  }
+  // The graph first: an edge it refuses changes nothing.
+  PoseGraph graph;
+  for (const Submap& submap : saved.submaps) graph.addNode(submap.place.T_map_anchor());
+  for (const PoseEdge& edge : saved.edges) graph.addEdge(edge);
+  const bool observed = std::any_of(saved.submaps.begin(), saved.submaps.end(),
+                                    [](const Submap& submap) { return !submap.map->observesNothing(); });
+  if (!observed) throw std::invalid_argument("the saved submaps hold no observed voxel: nothing to track against");
+  clearSubmaps();
+  map_ = std::move(saved.submaps.back().map);
+  active_ = saved.submaps.back().place;
+  saved.submaps.pop_back();
+  closed_submaps_ = std::move(saved.submaps);
+  config_.volume = map_->config();
+  budget_.reset();  // submaps have none (PipelineConfig::validate)
+  graph_ = std::move(graph);
+  // The saved session's last solution placed them; loops() and the counts are this session's.
+  solved_edges_ = graph_.edges().size();
+  places_ = places ? std::move(places) : std::make_unique<PlaceMemory>(config_.places);
+  keyframe_submaps_ = std::move(saved.keyframe_submaps);
+  // The search starts at the map's start pose: the identity in the map frame.
+  startInLoadedMap(active_.T_map_W.inverse());
+}
+
+bool SdfPipeline::keepsSubmaps(const PipelineConfig& config, const SubmapGraph& saved) {
+  return saved.submaps.size() > 1 && config.submaps.enabled() && config.relocalise;
+}
+
+SubmapGraph SdfPipeline::copySubmaps() const {
+  SubmapGraph copy;
+  if (closed_submaps_.empty()) {
+    copy.submaps.push_back(Submap{copyWholeMap(), active_});
+  } else {
+    for (const Submap& submap : closed_submaps_) copy.submaps.push_back(Submap{submap.map->clone(), submap.place});
+    copy.submaps.push_back(Submap{map_->clone(), active_});
+  }
+  copy.edges = graph_.edges();
+  copy.keyframe_submaps = keyframe_submaps_;
+  return copy;
+}
+
+void SdfPipeline::startInLoadedMap(const Eigen::Isometry3d& T_W_start) {
+  T_W_C_ = T_W_C_last_fused_ = T_W_start;
   map_initialised_ = true;
   consecutive_failures_ = 0;
   motion_.clear();
@@ -536,15 +591,15 @@ const SubmapPlace& SdfPipeline::submapPlace(int node) const {
   return closed_submaps_[node].place;
 }
 
+std::vector<Eigen::Isometry3d> SdfPipeline::submapFrames() const {
+  std::vector<Eigen::Isometry3d> frames;
+  for (const Submap& submap : closed_submaps_) frames.push_back(submap.place.T_map_W);
+  frames.push_back(active_.T_map_W);
+  return frames;
+}
+
 std::unique_ptr<PlaceMemory> SdfPipeline::placesInMapFrame() const {
-  auto moved = std::make_unique<PlaceMemory>(places_->config());
-  const std::vector<Keyframe>& keyframes = places_->keyframes();
-  for (size_t k = 0; k < keyframes.size(); ++k) {
-    Keyframe keyframe = keyframes[k];
-    keyframe.T_W_C = submapPlace(keyframe_submaps_[k]).T_map_W * keyframe.T_W_C;
-    moved->add(std::move(keyframe));
-  }
-  return moved;
+  return sdf_tracker::placesInMapFrame(*places_, keyframe_submaps_, submapFrames());
 }
 
 void SdfPipeline::closeLoops(const DepthImage& filtered, const PinholeCamera& camera, FrameReport* report) {

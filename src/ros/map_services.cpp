@@ -69,17 +69,25 @@ std::string MapServices::outputPath(const std::string& requested, const std::str
   return requested.empty() ? options_.output_directory + "/" + default_name : requested;
 }
 
-std::unique_ptr<st::TsdfMap> MapServices::copyMap(std::vector<st::io::StampedPose>* trajectory,
-                                                  st::PlaceMemory* places) {
+std::vector<st::io::StampedPose> MapServices::placedTrajectory() const {
+  // Where the pose graph places each pose now, in ~map_frame.
+  std::vector<st::io::StampedPose> trajectory = state_.path.placed(*state_.pipeline);
+  const Eigen::Isometry3d T_map_W = poses_.T_map_W();
+  for (st::io::StampedPose& pose : trajectory) pose.T_W_C = T_map_W * pose.T_W_C;
+  return trajectory;
+}
+
+std::unique_ptr<st::TsdfMap> MapServices::copyMap(std::vector<st::io::StampedPose>* trajectory) {
   std::lock_guard<std::mutex> lock(state_.mutex);
-  if (trajectory) {
-    // Where the pose graph places each pose now, in ~map_frame.
-    *trajectory = state_.path.placed(*state_.pipeline);
-    const Eigen::Isometry3d T_map_W = poses_.T_map_W();
-    for (st::io::StampedPose& pose : *trajectory) pose.T_W_C = T_map_W * pose.T_W_C;
-  }
-  if (places) *places = *state_.pipeline->placesInMapFrame();  // where the pose graph places them
+  if (trajectory) *trajectory = placedTrajectory();
   return state_.pipeline->copyWholeMap();  // swapped blocks (MaxMemoryMB) included
+}
+
+st::SubmapGraph MapServices::copySubmaps(std::vector<st::io::StampedPose>* trajectory, st::PlaceMemory* places) {
+  std::lock_guard<std::mutex> lock(state_.mutex);
+  *trajectory = placedTrajectory();
+  *places = state_.pipeline->places();  // each keyframe in its submap's frame
+  return state_.pipeline->copySubmaps();
 }
 
 void MapServices::writeTrajectory(const std::vector<st::io::StampedPose>& trajectory) const {
@@ -101,8 +109,7 @@ bool MapServices::writeAtShutdown() {
     }
   }
   std::vector<st::io::StampedPose> trajectory;
-  st::PlaceMemory places;
-  const std::unique_ptr<st::TsdfMap> map = copyMap(&trajectory, &places);
+  const std::unique_ptr<st::TsdfMap> map = copyMap(&trajectory);
   bool all_written = true;
   auto attempt = [&all_written](const char* what, const std::string& path, const std::function<void()>& write) {
     try {
@@ -132,7 +139,7 @@ bool MapServices::writeAtShutdown() {
   }
   if (options_.output_volume) {
     const std::string path = outputPath("", "sdf_volume.vti");
-    attempt("volume", path, [&] { st::io::writeMap(path, *map, &places, poses_.fixedMapFrame()); });
+    attempt("volume", path, [&] { st::io::writeMap(path, *map, nullptr, poses_.fixedMapFrame()); });
   }
   std::fflush(stdout);
   return all_written;
@@ -186,11 +193,14 @@ bool MapServices::saveVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
     const std::string path = outputPath(req.path, "sdf_volume.vti");
     std::vector<st::io::StampedPose> trajectory;
     st::PlaceMemory places;
-    st::io::writeMap(path, *copyMap(&trajectory, &places), &places, poses_.fixedMapFrame());
+    const st::SubmapGraph submaps = copySubmaps(&trajectory, &places);
+    st::io::writeMap(path, submaps, &places, poses_.fixedMapFrame());
     writeTrajectory(trajectory);
-    return "wrote the map to " + path + (st::io::hasExtension(path, ".sdfmap")
-                                            ? " with " + std::to_string(places.keyframes().size()) + " keyframes"
-                                            : std::string(" (a .vti keeps no place memory)"));
+    return "wrote the map to " + path +
+           (st::io::hasExtension(path, ".sdfmap")
+                ? " with " + std::to_string(places.keyframes().size()) + " keyframes" +
+                      (submaps.submaps.size() > 1 ? " in " + std::to_string(submaps.submaps.size()) + " submaps and their pose graph" : "")
+                : std::string(" (a .vti keeps no place memory)"));
   });
 }
 
@@ -228,25 +238,25 @@ bool MapServices::loadVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
       places_config = state_.pipeline->config().places;
     }
     // Read before taking the lock.
-    std::unique_ptr<st::PlaceMemory> places;
-    std::optional<Eigen::Isometry3d> T_map_W;
-    std::unique_ptr<st::TsdfMap> loaded = st::io::readMap(path, compact, &places, places_config, &T_map_W);
+    st::io::LoadedMap loaded = st::io::loadMap(path, compact, places_config);
     std::lock_guard<std::mutex> lock(state_.mutex);
-    const std::string held = st::io::describeLoadedPlaces(places.get(), state_.pipeline->config().relocalise);
-    const std::string grey =
-        st::io::describeLoadedColour(*loaded, state_.pipeline->config().fuse_colour && options_.colourUsable());
+    const std::string held = st::io::describeLoadedPlaces(loaded.places.get(), state_.pipeline->config().relocalise);
+    const std::string submaps = st::io::describeLoadedSubmaps(loaded.submaps, state_.pipeline->config());
+    const std::string grey = st::io::describeLoadedColour(*loaded.submaps.submaps.front().map,
+                                                          state_.pipeline->config().fuse_colour && options_.colourUsable());
     // A grid holds no submaps: where the user left SubmapSize to the preset, one map from now on
     // (as a grid loaded at the start is); typed, setMap refuses it by name.
     st::Settings settings{state_.pipeline->config(), st::CameraSettings()};
-    const bool grid = loaded->type() == st::MapType::kDense;
+    const bool grid = loaded.submaps.submaps.front().map->type() == st::MapType::kDense;
     const std::optional<std::string> one_map =
         grid ? settings.keepToOneMapWhereNeeded(options_.given_parameters, true) : std::nullopt;
-    state_.pipeline->setMap(std::move(loaded), std::move(places), one_map.has_value());
+    state_.pipeline->setSubmaps(std::move(loaded.submaps), std::move(loaded.places), one_map.has_value());
     state_.path.clear();
     state_.restarted = true;
-    if (T_map_W) poses_.restoreMapFrame(*T_map_W);
-    return "tracking against " + path + ", which " + held + "; " + describeLoadedMapFrame(T_map_W.has_value()) +
-           (grey.empty() ? "" : "; it " + grey) + (one_map ? "; " + *one_map : "");
+    if (loaded.T_map_W) poses_.restoreMapFrame(*loaded.T_map_W);
+    return "tracking against " + path + ", which " + held + "; " + describeLoadedMapFrame(loaded.T_map_W.has_value()) +
+           (submaps.empty() ? "" : "; it " + submaps) + (grey.empty() ? "" : "; it " + grey) +
+           (one_map ? "; " + *one_map : "");
   });
 }
 

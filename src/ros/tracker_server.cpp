@@ -68,19 +68,20 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
   state_.pipeline = std::make_unique<st::SdfPipeline>(settings.pipeline);
   std::optional<Eigen::Isometry3d> loaded_map_frame;
   if (options_.load_volume != "none" && !options_.load_volume.empty()) {
-    std::unique_ptr<st::PlaceMemory> places;
-    std::unique_ptr<st::TsdfMap> map = st::io::readMap(options_.load_volume, settings.pipeline.volume.compact_voxels,
-                                                       &places, settings.pipeline.places, &loaded_map_frame);
-    const std::string held = st::io::describeLoadedPlaces(places.get(), settings.pipeline.relocalise);
-    if (const std::string grey =
-            st::io::describeLoadedColour(*map, settings.pipeline.fuse_colour && options_.colourUsable());
+    st::io::LoadedMap loaded =
+        st::io::loadMap(options_.load_volume, settings.pipeline.volume.compact_voxels, settings.pipeline.places);
+    loaded_map_frame = loaded.T_map_W;
+    const std::string held = st::io::describeLoadedPlaces(loaded.places.get(), settings.pipeline.relocalise);
+    const std::string submaps = st::io::describeLoadedSubmaps(loaded.submaps, settings.pipeline);
+    if (const std::string grey = st::io::describeLoadedColour(*loaded.submaps.submaps.front().map,
+                                                              settings.pipeline.fuse_colour && options_.colourUsable());
         !grey.empty()) {
       ROS_INFO("sdf_tracker: the map in %s %s", options_.load_volume.c_str(), grey.c_str());
     }
-    state_.pipeline->setMap(std::move(map), std::move(places));
-    ROS_INFO("sdf_tracker: tracking against the map in %s (%s), which %s; %s", options_.load_volume.c_str(),
+    state_.pipeline->setSubmaps(std::move(loaded.submaps), std::move(loaded.places));
+    ROS_INFO("sdf_tracker: tracking against the map in %s (%s), which %s; %s%s", options_.load_volume.c_str(),
              state_.pipeline->config().volume.describe().c_str(), held.c_str(),
-             describeLoadedMapFrame(loaded_map_frame.has_value()).c_str());
+             describeLoadedMapFrame(loaded_map_frame.has_value()).c_str(), (submaps.empty() ? "" : "; it " + submaps).c_str());
   }
 
   poses_ = std::make_unique<PoseBroadcaster>(nh_, pnh_, options_, loaded_map_frame);

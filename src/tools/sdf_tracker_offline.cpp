@@ -71,8 +71,8 @@ Tracks a depth camera through a TUM-layout sequence and reconstructs the scene.
   --odometry FILE       another odometry beside the tracker (a robot's wheels): the camera's poses
                         in its frame, TUM format (sdf_tracker_synth --odometry writes odometry.txt);
                         its motion predicts each frame and holds where the view constrains nothing
-  --save-map            also write the map as map.sdfmap (every block, exactly, and the place
-                        memory; reloadable)
+  --save-map            also write the map as map.sdfmap (every submap's blocks, exactly, their
+                        pose graph and the place memory; --load-volume takes it up)
   --save-volume         also write the map as sdf_volume.vti (ParaView) and triangles.obj
   --volume-region X0,Y0,Z0,X1,Y1,Z1  with --save-volume: only the voxels in this box (metres,
                         the map's frame: the first camera's), e.g. one room of a large map
@@ -230,15 +230,17 @@ int run(int argc, char** argv) {
   }
   if (args.has("load-volume")) {
     const std::string& path = args.get("load-volume");
-    std::unique_ptr<st::PlaceMemory> places;
-    std::unique_ptr<st::TsdfMap> map =
-        st::io::readMap(path, settings.pipeline.volume.compact_voxels, &places, settings.pipeline.places);
-    std::cout << (places && !places->empty() ? "" : "note: ") << path << " "
-              << st::io::describeLoadedPlaces(places.get(), settings.pipeline.relocalise) << "\n";
-    if (const std::string grey = st::io::describeLoadedColour(*map, read_colour); !grey.empty()) {
+    st::io::LoadedMap loaded = st::io::loadMap(path, settings.pipeline.volume.compact_voxels, settings.pipeline.places);
+    std::cout << (loaded.places && !loaded.places->empty() ? "" : "note: ") << path << " "
+              << st::io::describeLoadedPlaces(loaded.places.get(), settings.pipeline.relocalise) << "\n";
+    if (const std::string submaps = st::io::describeLoadedSubmaps(loaded.submaps, settings.pipeline); !submaps.empty()) {
+      std::cout << path << " " << submaps << "\n";
+    }
+    if (const std::string grey = st::io::describeLoadedColour(*loaded.submaps.submaps.front().map, read_colour);
+        !grey.empty()) {
       std::cout << "note: " << path << " " << grey << "\n";
     }
-    pipeline.setMap(std::move(map), std::move(places));
+    pipeline.setSubmaps(std::move(loaded.submaps), std::move(loaded.places));
     // The file's grid replaces the configured one: the rules between parameters must hold for it.
     st::throwIfInvalid("parameters with the grid of " + path, st::Settings{pipeline.config(), settings.camera}.validate());
     if (args.has("initial-pose")) {
@@ -424,13 +426,15 @@ int run(int argc, char** argv) {
     const st::TriangleMesh mesh = st::extractMesh(map);
     st::io::writePly(output.path("mesh.ply"), mesh);
     st::io::writePly(output.path("cloud.ply"), st::extractSurfaceCloud(map));
-    if (args.has("save-map")) st::io::writeMap(output.path("map.sdfmap"), map, pipeline.placesInMapFrame().get());
     if (args.has("save-volume")) {
       if (volume_region) st::io::writeVti(output.path("sdf_volume.vti"), st::toDenseVolume(map, *volume_region));
       else st::io::writeMap(output.path("sdf_volume.vti"), map);
       st::io::writeObj(output.path("triangles.obj"), mesh);
     }
   });
+
+  // The submaps, their graph and place memory, as a second session takes them up.
+  if (args.has("save-map")) st::io::writeMap(output.path("map.sdfmap"), pipeline.copySubmaps(), &pipeline.places());
 
   struct rusage usage;
   ::getrusage(RUSAGE_SELF, &usage);
@@ -472,7 +476,8 @@ int run(int argc, char** argv) {
           << pipeline.places().bytesPerKeyframe() << " bytes each";
   if (pipeline.config().submaps.enabled()) {
     summary << "\nsubmaps: " << pipeline.submapCount() << " (SubmapSize " << pipeline.config().submaps.max_distance_m
-            << " m, SubmapTurn " << pipeline.config().submaps.max_rotation_deg << " deg), merged into one for the files";
+            << " m, SubmapTurn " << pipeline.config().submaps.max_rotation_deg << " deg), merged into one for the mesh and cloud"
+            << (args.has("save-map") ? "; map.sdfmap keeps them and their pose graph" : "");
   }
   if (pipeline.config().loops.enabled) {
     summary << "\nloops: " << pipeline.loopsClosed() << " closed, " << pipeline.loopsRejected()

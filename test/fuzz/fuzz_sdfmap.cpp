@@ -1,5 +1,4 @@
-// Fuzz target: sdf_tracker binary maps (io::readSparseMap), with their place memory.
-#include <optional>
+// Fuzz target: sdf_tracker binary maps (io::readSubmaps): submaps, graph, place memory.
 #include <stdexcept>
 
 #include "fuzz_input.h"
@@ -8,8 +7,7 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path = sdf_tracker::fuzz::writeInput(data, size, "map.sdfmap");
   try {
-    std::optional<sdf_tracker::io::SavedPlaces> places;
-    sdf_tracker::io::readSparseMap(path, &places);
+    sdf_tracker::io::readSubmaps(path);
   } catch (const std::runtime_error&) {
   }
   return 0;

@@ -25,6 +25,7 @@
 #include "sdf_tracker/pipeline/pipeline.h"
 #include "sdf_tracker/sim/synthetic.h"
 #include "sdf_tracker/surface/surface.h"
+#include "sdfmap_bytes.h"
 #include "test_helpers.h"
 
 namespace sdf_tracker {
@@ -314,15 +315,8 @@ TEST(MapColour, IsSavedInTheMapFilesAndTheMeshAndAnOlderMapFileLoadsWithout) {
     return grey;
   }();
   io::writeSparseMap(dir + "/grey.sdfmap", grey_map);
-  std::ifstream in(dir + "/grey.sdfmap", std::ios::binary);
-  std::string v4((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  constexpr size_t kColourFlagAt = 64 + 48 + 64;
-  std::string v3 = v4.substr(0, kColourFlagAt) + v4.substr(kColourFlagAt + 8);
-  v3[8] = 3;
-  uint64_t hash = 0xcbf29ce484222325ull;
-  for (size_t i = 0; i + 8 < v3.size(); ++i) hash = (hash ^ static_cast<unsigned char>(v3[i])) * 0x100000001b3ull;
-  v3.replace(v3.size() - 8, 8, reinterpret_cast<const char*>(&hash), 8);
-  std::ofstream(dir + "/v3.sdfmap", std::ios::binary) << v3;
+  std::ofstream(dir + "/v3.sdfmap", std::ios::binary)
+      << test::asOlderSdfmapVersion(test::readBytes(dir + "/grey.sdfmap"), 3, 0, 0);
   const SparseTsdfMap old = io::readSparseMap(dir + "/v3.sdfmap");
   EXPECT_FALSE(old.holdsColour());
   EXPECT_EQ(old.blockIndices(), map.blockIndices());

@@ -18,7 +18,9 @@
 #include "sdf_tracker/io/sdfmap_file.h"
 #include "sdf_tracker/io/trajectory_file.h"
 #include "sdf_tracker/io/vti_file.h"
+#include "sdf_tracker/map/map_merge.h"
 #include "sdf_tracker/surface/surface.h"
+#include "sdfmap_bytes.h"
 #include "test_helpers.h"
 
 namespace sdf_tracker {
@@ -180,11 +182,6 @@ SparseTsdfMap patternedSparseMap() {
   return map;
 }
 
-std::string readBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
-
 /// The message readSparseMap gives for these bytes ("" when it loads them).
 std::string sparseMapError(const std::string& dir, const std::string& bytes) {
   writeFile(dir + "/edited.sdfmap", bytes);
@@ -238,21 +235,12 @@ TEST(Io, ADenseGridSavedAsASparseMapKeepsEveryObservedVoxel) {
   }
 }
 
-/// Where a .sdfmap's place memory header, map frame, colour flag and first block start.
-constexpr size_t kPlacesHeader = 64;
-constexpr size_t kMapFrame = kPlacesHeader + 48;
-constexpr size_t kColourFlag = kMapFrame + 64;
-constexpr size_t kFirstBlock = kColourFlag + 8;
-
-/// The file's bytes with its FNV-1a checksum made right again, as a careful forger would.
-std::string withValidChecksum(std::string bytes) {
-  uint64_t hash = 0xcbf29ce484222325ull;
-  for (size_t i = 0; i + sizeof(uint64_t) < bytes.size(); ++i) {
-    hash = (hash ^ static_cast<unsigned char>(bytes[i])) * 0x100000001b3ull;
-  }
-  bytes.replace(bytes.size() - sizeof(hash), sizeof(hash), reinterpret_cast<const char*>(&hash), sizeof(hash));
-  return bytes;
-}
+using test::asOlderSdfmapVersion;
+using test::readBytes;
+using test::withValidChecksum;
+constexpr size_t kPlacesHeader = test::kSdfmapPlacesHeader;
+constexpr size_t kMapFrame = test::kSdfmapMapFrame;
+constexpr size_t kFirstBlock = test::kSdfmapFirstBlock;
 
 TEST(Io, CorruptSparseMapsAreRefusedSayingWhatIsWrong) {
   const std::string dir = test::scratchDirectory("sdfmap_bad");
@@ -266,8 +254,8 @@ TEST(Io, CorruptSparseMapsAreRefusedSayingWhatIsWrong) {
   EXPECT_TRUE(has(sparseMapError(dir, good + "x"), "truncated"));
   EXPECT_TRUE(has(sparseMapError(dir, "hello"), "not an sdf_tracker map"));
   std::string version = good;
-  version[8] = 5;
-  EXPECT_TRUE(has(sparseMapError(dir, version), "format version 5; this build reads versions 1 to 4"))
+  version[8] = 6;
+  EXPECT_TRUE(has(sparseMapError(dir, version), "format version 6; this build reads versions 1 to 5"))
       << sparseMapError(dir, version);
   std::string flipped = good;
   flipped[kFirstBlock + 12 + 1000] ^= 0x01;  // one bit of a voxel of the first block
@@ -294,8 +282,8 @@ TEST(Io, CorruptSparseMapsAreRefusedSayingWhatIsWrong) {
   EXPECT_TRUE(has(sparseMapError(dir, huge_count), "lists 1099511627776 blocks"));
   const uint64_t absurd_count = 1ull << 62;  // count x block size wraps in 64 bits
   huge_count.replace(56, sizeof(absurd_count), reinterpret_cast<const char*>(&absurd_count), sizeof(absurd_count));
-  EXPECT_TRUE(has(sparseMapError(dir, huge_count), "lists 4611686018427387904 blocks and 0 keyframes (more than 2^62 "
-                                                   "bytes after"))
+  EXPECT_TRUE(has(sparseMapError(dir, huge_count), "lists 4611686018427387904 blocks, 0 keyframes, 1 submaps and 0 "
+                                                   "edges (more than 2^60 bytes after"))
       << sparseMapError(dir, huge_count);
   EXPECT_THROW(io::readMap(dir + "/good.map"), std::runtime_error) << "unknown extension";
   EXPECT_THROW(io::writeMap(dir + "/out.bin", patternedSparseMap()), std::runtime_error) << "unknown extension";
@@ -354,35 +342,46 @@ TEST(Io, TheMapFileKeepsThePlaceMemoryAndAFirstVersionFileStillLoads) {
   EXPECT_EQ(static_cast<const SparseTsdfMap&>(*map).blockIndices(), patternedSparseMap().blockIndices());
 
   // Version 1: the same blocks without the place memory's header or keyframes (nor the map frame).
-  const std::string v4 = readBytes(dir + "/map.sdfmap");
-  const size_t keyframes = 3 * (56 + 20);
-  std::string v1 = v4.substr(0, kPlacesHeader) + v4.substr(kFirstBlock, v4.size() - kFirstBlock - keyframes);
-  v1[8] = 1;
-  writeFile(dir + "/v1.sdfmap", withValidChecksum(v1));
+  const std::string v5 = readBytes(dir + "/map.sdfmap");
+  const size_t keyframes = 3 * test::sdfmapKeyframeBytes(20);
+  writeFile(dir + "/v1.sdfmap", asOlderSdfmapVersion(v5, 1, 3, 20));
   const std::unique_ptr<TsdfMap> old = io::readMap(dir + "/v1.sdfmap", false, &loaded);
   EXPECT_FALSE(loaded) << "a version 1 file has no place memory";
   EXPECT_EQ(static_cast<const SparseTsdfMap&>(*old).blockIndices(), patternedSparseMap().blockIndices());
+
+  // Version 4: one map, its keyframes without their submaps.
+  writeFile(dir + "/v4.sdfmap", asOlderSdfmapVersion(v5, 4, 3, 20));
+  const std::unique_ptr<TsdfMap> four = io::readMap(dir + "/v4.sdfmap", false, &loaded);
+  ASSERT_TRUE(loaded);
+  ASSERT_EQ(loaded->keyframes().size(), 3u);
+  EXPECT_TRUE(loaded->keyframes()[2].T_W_C.isApprox(places.keyframes()[2].T_W_C, 1e-12));
+  EXPECT_EQ(static_cast<const SparseTsdfMap&>(*four).blockIndices(), patternedSparseMap().blockIndices());
 
   // Keyframes no writer makes are refused by name, even with a valid checksum.
   auto has = [](const std::string& message, const std::string& part) {
     return message.find(part) != std::string::npos;
   };
-  const size_t first_keyframe = v4.size() - 8 - keyframes;
-  std::string skewed = v4;
+  const size_t first_keyframe = v5.size() - 8 - keyframes;
+  std::string skewed = v5;
   const double two = 2.0;
   skewed.replace(first_keyframe + 24, sizeof(two), reinterpret_cast<const char*>(&two), sizeof(two));
   EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(skewed)), "keyframe 0: orientation of norm"))
       << sparseMapError(dir, withValidChecksum(skewed));
-  std::string wide_code = v4;
+  std::string wide_code = v5;
   wide_code[first_keyframe + 56 + 3] = static_cast<char>(0x30);
   EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(wide_code)), "keyframe 0: fern 3 has code 48, beyond its 4 bits"))
       << sparseMapError(dir, withValidChecksum(wide_code));
-  std::string no_ferns = v4;
+  std::string no_ferns = v5;
   const int32_t zero = 0;
   no_ferns.replace(kPlacesHeader + 16, sizeof(zero), reinterpret_cast<const char*>(&zero), sizeof(zero));
   EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(no_ferns)), "invalid place descriptor: fern_count"))
       << sparseMapError(dir, withValidChecksum(no_ferns));
-  EXPECT_TRUE(has(sparseMapError(dir, v4.substr(0, v4.size() - 30)), "3 keyframes"));
+  EXPECT_TRUE(has(sparseMapError(dir, v5.substr(0, v5.size() - 30)), "3 keyframes"));
+  std::string no_submap = v5;
+  const int32_t fourth = 3;
+  no_submap.replace(first_keyframe + 56 + 20, sizeof(fourth), reinterpret_cast<const char*>(&fourth), sizeof(fourth));
+  EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(no_submap)), "keyframe 0 is of submap 3, beyond the 1 there are"))
+      << sparseMapError(dir, withValidChecksum(no_submap));
 }
 
 TEST(Io, TheMapFileKeepsTheFrameTheMapWasPublishedInAndASecondVersionFileLoadsWithout) {
@@ -408,10 +407,8 @@ TEST(Io, TheMapFileKeepsTheFrameTheMapWasPublishedInAndASecondVersionFileLoadsWi
   EXPECT_FALSE(loaded_frame) << "a .vti keeps no map frame";
 
   // Version 2: the place memory, no map frame (nor colour flag).
-  const std::string v4 = readBytes(dir + "/map.sdfmap");
-  std::string v2 = v4.substr(0, kMapFrame) + v4.substr(kFirstBlock);
-  v2[8] = 2;
-  writeFile(dir + "/v2.sdfmap", withValidChecksum(v2));
+  const std::string v5 = readBytes(dir + "/map.sdfmap");
+  writeFile(dir + "/v2.sdfmap", asOlderSdfmapVersion(v5, 2, 3, 20));
   io::readMap(dir + "/v2.sdfmap", false, &loaded_places, PlaceMemoryConfig(), &loaded_frame);
   EXPECT_FALSE(loaded_frame) << "a version 2 file has no map frame";
   ASSERT_TRUE(loaded_places);
@@ -421,16 +418,137 @@ TEST(Io, TheMapFileKeepsTheFrameTheMapWasPublishedInAndASecondVersionFileLoadsWi
   auto has = [](const std::string& message, const std::string& part) {
     return message.find(part) != std::string::npos;
   };
-  std::string flag = v4;
+  std::string flag = v5;
   flag[kMapFrame] = 2;
   EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(flag)), "map frame: flag 2 is neither 0 nor 1"))
       << sparseMapError(dir, withValidChecksum(flag));
-  std::string skewed = v4;
+  std::string skewed = v5;
   const double two = 2.0;
   skewed.replace(kMapFrame + 8 + 24, sizeof(two), reinterpret_cast<const char*>(&two), sizeof(two));
   EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(skewed)), "map frame: orientation of norm"))
       << sparseMapError(dir, withValidChecksum(skewed));
-  EXPECT_TRUE(has(sparseMapError(dir, v4.substr(0, kMapFrame + 20)), "truncated"));
+  EXPECT_TRUE(has(sparseMapError(dir, v5.substr(0, kMapFrame + 20)), "truncated"));
+}
+
+/// Three submaps of the patterned map's blocks (the second without its last block) at places of
+/// their own, joined by two odometry edges and a loop, and the patterned keyframes taken in
+/// submaps 0, 2 and 1.
+SubmapGraph patternedSubmaps() {
+  SubmapGraph saved;
+  for (int i = 0; i < 3; ++i) {
+    auto map = std::make_unique<SparseTsdfMap>(patternedSparseMap());
+    if (i == 1) map->remove(SparseTsdfMap::BlockIndex(1000, -2000, 7));
+    SubmapPlace place;
+    place.node = i;
+    place.T_W_anchor = test::perturbed(Eigen::Isometry3d::Identity(), 0.7 * i, 0.1 * i);
+    place.T_map_W = test::perturbed(Eigen::Isometry3d::Identity(), 0.02 * i, 0.01 * i);
+    place.frames_fused = 30 + i;
+    place.path_m = 0.9 * i;
+    saved.submaps.push_back(Submap{std::move(map), place});
+  }
+  PoseInformation loop = PoseInformation::Identity() * 400.0;
+  loop(0, 4) = loop(4, 0) = 3.5;  // not diagonal: every entry must come back
+  saved.edges = {PoseEdge{0, 1, test::perturbed(Eigen::Isometry3d::Identity(), 0.7, 0.1), PoseInformation::Identity() * 900.0,
+                          PoseEdgeKind::kOdometry},
+                 PoseEdge{1, 2, test::perturbed(Eigen::Isometry3d::Identity(), 0.7, 0.1), PoseInformation::Identity() * 800.0,
+                          PoseEdgeKind::kOdometry},
+                 PoseEdge{0, 2, test::perturbed(Eigen::Isometry3d::Identity(), 1.4, 0.2), loop, PoseEdgeKind::kLoop}};
+  saved.keyframe_submaps = {0, 2, 1};
+  return saved;
+}
+
+TEST(Io, TheMapFileKeepsTheSubmapsTheirGraphAndEachKeyframesSubmap) {
+  // Issue 43: a .sdfmap kept the submaps merged, and a second session started a graph of its own
+  // on the merged whole.
+  const std::string dir = test::scratchDirectory("sdfmap_submaps");
+  const SubmapGraph saved = patternedSubmaps();
+  const PlaceMemory places = patternedPlaces();
+  const Eigen::Isometry3d T_map_W = test::perturbed(Eigen::Isometry3d::Identity(), 0.4, 0.05);
+  io::writeMap(dir + "/map.sdfmap", saved, &places, T_map_W);
+  const io::LoadedMap loaded = io::loadMap(dir + "/map.sdfmap");
+  ASSERT_EQ(loaded.submaps.submaps.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    const auto& before = static_cast<const SparseTsdfMap&>(*saved.submaps[i].map);
+    const auto& after = static_cast<const SparseTsdfMap&>(*loaded.submaps.submaps[i].map);
+    ASSERT_EQ(after.blockIndices(), before.blockIndices()) << "submap " << i;
+    for (const SparseTsdfMap::BlockIndex& index : before.blockIndices()) {
+      for (int v = 0; v < kBlockVoxels; ++v) {
+        ASSERT_EQ(after.find(index)->voxels[v].distance_m, before.find(index)->voxels[v].distance_m);
+        ASSERT_EQ(after.find(index)->voxels[v].weight, before.find(index)->voxels[v].weight);
+      }
+    }
+    const SubmapPlace& a = loaded.submaps.submaps[i].place;
+    const SubmapPlace& b = saved.submaps[i].place;
+    EXPECT_EQ(a.node, b.node);
+    EXPECT_TRUE(a.T_W_anchor.isApprox(b.T_W_anchor, 1e-12)) << "submap " << i;
+    EXPECT_TRUE(a.T_map_W.isApprox(b.T_map_W, 1e-12)) << "submap " << i;
+    EXPECT_EQ(a.frames_fused, b.frames_fused);
+    EXPECT_EQ(a.path_m, b.path_m);
+  }
+  ASSERT_EQ(loaded.submaps.edges.size(), 3u);
+  for (size_t e = 0; e < 3; ++e) {
+    EXPECT_EQ(loaded.submaps.edges[e].from, saved.edges[e].from);
+    EXPECT_EQ(loaded.submaps.edges[e].to, saved.edges[e].to);
+    EXPECT_EQ(loaded.submaps.edges[e].kind, saved.edges[e].kind);
+    EXPECT_TRUE(loaded.submaps.edges[e].T_from_to.isApprox(saved.edges[e].T_from_to, 1e-12));
+    EXPECT_EQ(loaded.submaps.edges[e].information, saved.edges[e].information) << "edge " << e;
+  }
+  EXPECT_EQ(loaded.submaps.keyframe_submaps, saved.keyframe_submaps);
+  ASSERT_TRUE(loaded.places);
+  ASSERT_EQ(loaded.places->keyframes().size(), 3u);
+  EXPECT_TRUE(loaded.places->keyframes()[1].T_W_C.isApprox(places.keyframes()[1].T_W_C, 1e-12)) << "in its submap's frame";
+  ASSERT_TRUE(loaded.T_map_W);
+  EXPECT_TRUE(loaded.T_map_W->isApprox(T_map_W, 1e-12));
+
+  // As one map: the submaps merged where the graph places them, the keyframes in the map frame.
+  std::unique_ptr<PlaceMemory> merged_places;
+  const std::unique_ptr<TsdfMap> merged = io::readMap(dir + "/map.sdfmap", false, &merged_places);
+  std::vector<PlacedMap> parts;
+  for (const Submap& submap : saved.submaps) {
+    parts.push_back({&static_cast<const SparseTsdfMap&>(*submap.map), submap.place.T_map_W});
+  }
+  EXPECT_EQ(static_cast<const SparseTsdfMap&>(*merged).blockIndices(), mergeMaps(parts).blockIndices());
+  ASSERT_TRUE(merged_places);
+  EXPECT_TRUE(merged_places->keyframes()[1].T_W_C.isApprox(saved.submaps[2].place.T_map_W * places.keyframes()[1].T_W_C, 1e-12));
+
+  // What no writer makes is refused by name, even with a valid checksum.
+  const std::string good = readBytes(dir + "/map.sdfmap");
+  auto has = [](const std::string& message, const std::string& part) {
+    return message.find(part) != std::string::npos;
+  };
+  const size_t first_edge = test::kSdfmapFirstSubmap + 3 * test::kSdfmapSubmapRecord;
+  auto edited = [&](size_t at, const auto& value) {
+    std::string bytes = good;
+    bytes.replace(at, sizeof(value), reinterpret_cast<const char*>(&value), sizeof(value));
+    return sparseMapError(dir, withValidChecksum(bytes));
+  };
+  EXPECT_TRUE(has(edited(first_edge + 4, int32_t{5}), "edge 0 (0 to 5) names a submap beyond the 3 there are"))
+      << edited(first_edge + 4, int32_t{5});
+  EXPECT_TRUE(has(edited(first_edge + 4, int32_t{0}), "edge 0 (0 to 0) joins a submap to itself"));
+  EXPECT_TRUE(has(edited(first_edge + test::kSdfmapEdgeRecord + 8, uint32_t{2}), "edge 1: kind 2 is neither"));
+  const size_t loop_information = first_edge + 2 * test::kSdfmapEdgeRecord + 72;
+  EXPECT_TRUE(has(edited(loop_information + 8 * 4, 3.6), "edge 2: information is not symmetric"))
+      << edited(loop_information + 8 * 4, 3.6);
+  EXPECT_TRUE(has(edited(loop_information, -400.0), "edge 2: information is not positive definite"));
+  // The second submap's block count: one fewer than it holds, then more than the file holds.
+  const size_t second_blocks = test::kSdfmapFirstSubmap + test::kSdfmapSubmapRecord + 112;
+  EXPECT_TRUE(has(edited(second_blocks, uint64_t{1}), "its submaps list 7 blocks, its header 8")) << edited(second_blocks, uint64_t{1});
+  EXPECT_TRUE(has(edited(second_blocks, uint64_t{7}), "submap 1 lists 7 blocks, beyond the 8 of the file"));
+  EXPECT_TRUE(has(edited(second_blocks + 16, std::nan("")), "submap 1: path of nan m")) << edited(second_blocks + 16, std::nan(""));
+  EXPECT_TRUE(has(edited(test::kSdfmapFirstSubmap + 56 + 24, 2.0), "submap 0: place: orientation of norm"));
+  // The edges join the third submap to no other: the graph could not place it.
+  std::string cut = good;
+  const uint64_t one_edge = 1;
+  cut.replace(test::kSdfmapSubmapCounts + 8, sizeof(one_edge), reinterpret_cast<const char*>(&one_edge), sizeof(one_edge));
+  cut.erase(first_edge + test::kSdfmapEdgeRecord, 2 * test::kSdfmapEdgeRecord);
+  EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(cut)), "submap 2 is joined to the first by no edge"))
+      << sparseMapError(dir, withValidChecksum(cut));
+  // ... and such submaps are not written either.
+  SubmapGraph unjoined = patternedSubmaps();
+  unjoined.edges.erase(unjoined.edges.begin() + 1, unjoined.edges.end());
+  EXPECT_EQ(runtimeErrorOf([&] { io::writeMap(dir + "/unjoined.sdfmap", unjoined, &places); }),
+            dir + "/unjoined.sdfmap: not written: submap 2 is joined to the first by no edge: the graph cannot place it");
+  EXPECT_FALSE(std::ifstream(dir + "/unjoined.sdfmap").good());
 }
 
 TEST(Io, AnEmptyMapIsNeitherWrittenNorLoaded) {

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "sdf_tracker/io/map_file.h"
 #include "sdf_tracker/pipeline/loop_closure.h"
 #include "sdf_tracker/pipeline/parameters.h"
 #include "sdf_tracker/pipeline/pipeline.h"
@@ -161,7 +162,9 @@ struct CircleRun {
   LoopReport last_solve;  ///< the search step and graph solve still pending at the end, finished
 };
 
-CircleRun runCircle(SdfPipeline* pipeline, int frames, double period_s) {
+/// `frames` frames from `first_frame` on; every one must track unless the camera is searched for
+/// (a second session's first frames).
+CircleRun runCircle(SdfPipeline* pipeline, int frames, double period_s, int first_frame = 0) {
   const PinholeCamera camera = test::testCamera().scaledTo(160, 120);
   synthetic::NoiseModel biased;
   biased.enabled = false;
@@ -169,11 +172,13 @@ CircleRun runCircle(SdfPipeline* pipeline, int frames, double period_s) {
   const synthetic::Scene room = synthetic::Scene::indoorRoom();
   const Eigen::Isometry3d T_scene_W = synthetic::cameraPose(synthetic::Motion::kLoop, 0.0, period_s);
   CircleRun run;
-  for (int i = 0; i < frames; ++i) {
+  for (int i = first_frame; i < first_frame + frames; ++i) {
     const Eigen::Isometry3d T_scene_C = synthetic::cameraPose(synthetic::Motion::kLoop, i * kFramePeriod_s, period_s);
+    const bool searching = !pipeline->poseKnown();
     const FrameReport report =
         pipeline->processFrame(room.render(camera, T_scene_C, biased, 0), camera, i * kFramePeriod_s);
-    EXPECT_TRUE(report.track.ok()) << "frame " << i << ": " << report.track.message;
+    EXPECT_TRUE(report.track.ok() || (searching && report.track.status == TrackStatus::kRelocalising))
+        << "frame " << i << ": " << report.track.message;
     run.truth.push_back(T_scene_W.inverse() * T_scene_C);
     run.in_submaps.emplace_back(report.submap, pipeline->pose());
     run.published.push_back(pipeline->mapPose());
@@ -311,6 +316,60 @@ TEST(LoopClosure, EveryLoopClosedAgreesWithTheTruth) {
         << "loop " << edge.to << " -> " << edge.from;
   }
   EXPECT_EQ(loops, pipeline.loopsClosed());
+}
+
+TEST(LoopClosure, ASecondSessionInTheSavedSubmapsAddsToTheirGraph) {
+  // Issue 43: a saved map kept its submaps merged, and a second session began a graph of its own
+  // on the merged whole: what the first session's loops knew was lost to the next.
+  const SdfPipeline& first = *circle().pipeline;
+  const std::string dir = test::scratchDirectory("second_session");
+  io::writeMap(dir + "/map.sdfmap", first.copySubmaps(), &first.places());
+  io::LoadedMap loaded = io::loadMap(dir + "/map.sdfmap", false, first.config().places);
+  const int saved_submaps = static_cast<int>(first.submapCount());
+  const size_t saved_edges = first.poseGraph().edges().size();
+  ASSERT_EQ(static_cast<int>(loaded.submaps.submaps.size()), saved_submaps);
+  SdfPipeline second(loopPipeline(0.5));
+  second.setSubmaps(std::move(loaded.submaps), std::move(loaded.places));
+  ASSERT_EQ(static_cast<int>(second.submapCount()), saved_submaps);
+  EXPECT_FALSE(second.poseKnown()) << "the camera is searched for in the saved submaps";
+  for (int node = 0; node < saved_submaps; ++node) {
+    EXPECT_TRUE(second.submapPlace(node).T_map_W.isApprox(first.submapPlace(node).T_map_W, 1e-12))
+        << "submap " << node << " where the first session's graph placed it";
+  }
+
+  // A quarter of the way round the desk, for two seconds.
+  const int start = 70;
+  const CircleRun run = runCircle(&second, 60, kCirclePeriod_s, start);
+  size_t found = 0;
+  while (found < run.reports.size() && run.reports[found].relocalisation.outcome != Relocaliser::Outcome::kAccepted) {
+    ++found;
+  }
+  ASSERT_LT(found, 10u) << "the camera was not found in the saved submaps within a third of a second";
+  const std::vector<PoseEdge>& edges = second.poseGraph().edges();
+  ASSERT_GT(edges.size(), saved_edges);
+  for (size_t e = 0; e < saved_edges; ++e) {
+    EXPECT_EQ(edges[e].from, first.poseGraph().edges()[e].from);
+    EXPECT_EQ(edges[e].to, first.poseGraph().edges()[e].to);
+    EXPECT_TRUE(edges[e].T_from_to.isApprox(first.poseGraph().edges()[e].T_from_to, 1e-12)) << "edge " << e;
+  }
+  // The submap started where the camera was found is joined to a saved one, and the session's
+  // own submaps follow it in the same graph.
+  const PoseEdge& join = edges[saved_edges];
+  EXPECT_LT(join.from, saved_submaps);
+  EXPECT_EQ(join.to, saved_submaps);
+  EXPECT_GT(static_cast<int>(second.submapCount()), saved_submaps + 1) << "the session went on in submaps of its own";
+  // In the first session's map frame (the truth's frame is the first camera's, as the map's is):
+  // as near the truth as the first session's graph placed its own poses of the same views.
+  double worst_m = 0.0, map_worst_m = 0.0;
+  for (size_t i = found; i < run.published.size(); ++i) {
+    worst_m = std::max(worst_m, positionError(run.published[i], run.truth[i]));
+    const auto& [submap, T_W_C] = circle().run.in_submaps[start + i];
+    map_worst_m = std::max(map_worst_m, positionError(first.submapPlace(submap).T_map_W * T_W_C, run.truth[i]));
+  }
+  std::cout << "[ figures  ] found on frame " << found << " of the second session; " << second.submapCount() - saved_submaps
+            << " submaps of its own; published at most " << worst_m * 1e3 << " mm from the truth (the first session's "
+            << "graph placed its own poses there at most " << map_worst_m * 1e3 << " mm from it)\n";
+  EXPECT_LT(worst_m, map_worst_m + 0.03) << "the second session is not where the saved map places its views";
 }
 
 TEST(LoopClosure, ParametersRefuseLoopsWithoutSubmapsByName) {

@@ -7,6 +7,8 @@
 #include <Eigen/Geometry>
 
 #include "sdf_tracker/map/tsdf_map.h"
+#include "sdf_tracker/pipeline/pipeline.h"
+#include "sdf_tracker/pipeline/submaps.h"
 #include "sdf_tracker/places/place_memory.h"
 
 namespace sdf_tracker::io {
@@ -18,9 +20,32 @@ namespace sdf_tracker::io {
 /// .sdfmap only.
 void writeMap(const std::string& path, const TsdfMap& map, const PlaceMemory* places = nullptr,
               const std::optional<Eigen::Isometry3d>& T_map_W = std::nullopt);
+/// writeMap() of a session's submaps and graph (SdfPipeline::copySubmaps): a .sdfmap keeps them
+/// (writeSubmaps), with `places`' keyframes in their submaps' frames; a .vti holds them merged
+/// where the graph placed them.
+void writeMap(const std::string& path, const SubmapGraph& saved, const PlaceMemory* places = nullptr,
+              const std::optional<Eigen::Isometry3d>& T_map_W = std::nullopt);
+
+/// A map file as a session takes it up (SdfPipeline::setSubmaps).
+struct LoadedMap {
+  /// A .sdfmap's submaps and graph (one submap before format version 5); a .vti's grid as the one
+  /// submap.
+  SubmapGraph submaps;
+  /// The place memory, each keyframe in its submap's frame: its descriptor as saved, the rest of
+  /// its settings as given; nullptr when the file holds none (a .vti, a version 1 .sdfmap).
+  std::unique_ptr<PlaceMemory> places;
+  /// The saved map frame, or nothing (a .vti, a .sdfmap before version 3, one saved without).
+  std::optional<Eigen::Isometry3d> T_map_W;
+};
+/// Reads a .sdfmap or a .vti, refusing an empty map; other extensions are refused, naming the
+/// path.
+LoadedMap loadMap(const std::string& path, bool compact_voxels = false,
+                  const PlaceMemoryConfig& places_config = PlaceMemoryConfig());
+
+/// loadMap() as one map: the submaps merged where the graph placed them.
 /// `places`, when given, receives the file's place memory (its descriptor as saved, the rest of
 /// its settings from `places_config`), or nullptr when the file holds none (a .vti, a version 1
-/// .sdfmap); `T_map_W` the saved map frame, or nothing (a .vti, a .sdfmap before version 3, one
+/// .sdfmap), its keyframes in the map frame; `T_map_W` the saved map frame, or nothing (a .vti, a .sdfmap before version 3, one
 /// saved without).
 std::unique_ptr<TsdfMap> readMap(const std::string& path, bool compact_voxels = false,
                                  std::unique_ptr<PlaceMemory>* places = nullptr,
@@ -36,6 +61,11 @@ bool readsAsDenseGrid(const std::string& path);
 /// the camera is searched for in it, ...", or that it holds none and why, and what Relocalise
 /// then does.
 std::string describeLoadedPlaces(const PlaceMemory* places, bool relocalise);
+
+/// What becomes of a loaded map's submaps (SdfPipeline::keepsSubmaps), said after the file's
+/// name: "" for one; "holds 40 submaps joined by 41 edges (1 loop): kept as submaps, ..." or why
+/// they are merged into one map.
+std::string describeLoadedSubmaps(const SubmapGraph& saved, const PipelineConfig& config);
 
 /// With Colour on, what a loaded map without colour (a .sdfmap before version 4, a map saved
 /// without colour, a .vti without the colour array) means, said once after the file's name:

@@ -236,8 +236,8 @@ class SdfPipeline {
   /// memory budget, without the blocks swapped to disk; with submaps, the active one (see
   /// withWholeMap()).
   const TsdfMap& map() const { return *map_; }
-  /// A copy of the whole map, swapped blocks included, submaps merged into one: what a save or a
-  /// whole mesh must read.
+  /// A copy of the whole map, swapped blocks included, submaps merged into one: what a whole mesh
+  /// or a .vti must read (a .sdfmap keeps the submaps: copySubmaps()).
   std::unique_ptr<TsdfMap> copyWholeMap() const;
   /// Calls fn(const TsdfMap&) with the whole map: the map itself when nothing is swapped out and
   /// it is one submap, else a copy with the swapped blocks read back or the submaps merged (memory
@@ -293,6 +293,20 @@ class SdfPipeline {
   /// without loop closure from now on. Throws before changing anything.
   void setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemory> places = nullptr,
               bool one_map_for_grid = false);
+  /// Takes up a saved session (a .sdfmap's submaps, their graph and place memory, each keyframe
+  /// in its submap's frame): with submaps on and relocalise on, every submap where the graph
+  /// placed it, the last one active, the graph as it was; the camera is searched for in all of
+  /// them merged, and the submap started where it is found is joined to the nearest saved one by
+  /// an edge: the session adds to the saved graph. Otherwise (one saved submap, submaps off, or
+  /// no search to find the camera in several) the submaps merged into one map, as setMap() takes
+  /// it. Throws std::invalid_argument (changing nothing) for submaps that cannot be a map's
+  /// (SubmapGraph::problem) or an edge the graph refuses.
+  void setSubmaps(SubmapGraph saved, std::unique_ptr<PlaceMemory> places = nullptr, bool one_map_for_grid = false);
+  /// Whether setSubmaps() keeps `saved` as submaps (else it merges them into one map).
+  static bool keepsSubmaps(const PipelineConfig& config, const SubmapGraph& saved);
+  /// A copy of the submaps, their places and graph, and each keyframe's submap (without submaps:
+  /// the whole map, swapped blocks included, as one): what a .sdfmap keeps, with places().
+  SubmapGraph copySubmaps() const;
 
   /// Forgets where the camera is: the next frames search the map for it (needs relocalise on),
   /// trying `guess` first when given (a pose the user knows), and fuse nothing until a candidate
@@ -391,6 +405,11 @@ class SdfPipeline {
   void dropSearchMap();
   /// Back to one empty submap (and no graph), for a cleared or replaced map.
   void clearSubmaps();
+  /// After a map was loaded: the pose, its history and the search as at the start in it (the
+  /// camera at `T_W_start`; searched for with relocalise on).
+  void startInLoadedMap(const Eigen::Isometry3d& T_W_start);
+  /// T_map_W of every submap, by node.
+  std::vector<Eigen::Isometry3d> submapFrames() const;
   /// The loop detector's step on a tracked frame (a search in the background; what finished
   /// since the last frame is reported); a loop found goes into the graph (addLoop).
   void closeLoops(const DepthImage& filtered, const PinholeCamera& camera, FrameReport* report);

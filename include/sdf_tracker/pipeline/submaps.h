@@ -6,7 +6,9 @@
 
 #include <Eigen/Geometry>
 
+#include "sdf_tracker/graph/pose_graph.h"
 #include "sdf_tracker/map/tsdf_map.h"
+#include "sdf_tracker/places/place_memory.h"
 
 namespace sdf_tracker {
 
@@ -59,6 +61,39 @@ struct Submap {
   std::unique_ptr<TsdfMap> map;
   SubmapPlace place;
 };
+
+/// The map as submaps and the pose graph between them, as a session leaves it
+/// (SdfPipeline::copySubmaps) and a later session takes it up (SdfPipeline::setSubmaps): what a
+/// .sdfmap keeps. A map without submaps is one submap and no edge.
+struct SubmapGraph {
+  /// Oldest first, the one fused into last at the end; submap i is the graph's node i.
+  std::vector<Submap> submaps;
+  /// The graph's edges: the odometry between consecutive submaps, the loops, and the joins of a
+  /// submap started where a search found the camera (a later session's first).
+  std::vector<PoseEdge> edges;
+  /// The submap each keyframe of the place memory was taken in (its pose is in that submap's
+  /// frame W).
+  std::vector<int> keyframe_submaps;
+
+  /// Why these cannot be a map's submaps, for a place memory of `keyframes` keyframes ("" when
+  /// they can): none; a missing map; a dense grid among several; a node that is not its index; an
+  /// edge from a submap to itself or to one that does not exist; a keyframe count that is not
+  /// the place memory's, or a keyframe of a submap that does not exist; a submap the edges join
+  /// to no other (the graph could not place it).
+  std::string problem(size_t keyframes) const;
+  /// `places` (of these submaps) with each keyframe in the map frame.
+  std::unique_ptr<PlaceMemory> placesInMapFrame(const PlaceMemory& places) const;
+};
+
+/// The submaps as one map in the map frame, each where the graph places it (mergeMaps: one
+/// surface where two overlap); one at the map frame's identity is handed over as it is (a grid
+/// too). Throws std::invalid_argument for none.
+std::unique_ptr<TsdfMap> mergeSubmaps(std::vector<Submap> submaps);
+
+/// `places` with each keyframe moved from its submap's frame (`keyframe_submaps`) into the map
+/// frame, where T_map_W[submap] places that submap's.
+std::unique_ptr<PlaceMemory> placesInMapFrame(const PlaceMemory& places, const std::vector<int>& keyframe_submaps,
+                                              const std::vector<Eigen::Isometry3d>& T_map_W);
 
 /// Whether the camera at T_W_C has left the submap started at T_W_anchor (SubmapConfig's distance
 /// or turn).

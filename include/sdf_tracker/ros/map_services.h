@@ -47,10 +47,16 @@ class MapServices {
   template <typename Response>
   static bool answer(Response& res, const std::function<std::string()>& action);
   /// A copy of the whole map (the submaps merged where the pose graph places them), and when asked
-  /// of the trajectory so far (in ~map_frame, each pose where the graph places it now) and the
-  /// place memory, taken under the lock.
-  std::unique_ptr<sdf_tracker::TsdfMap> copyMap(std::vector<sdf_tracker::io::StampedPose>* trajectory,
-                                                sdf_tracker::PlaceMemory* places = nullptr);
+  /// of the trajectory so far (placedTrajectory()), taken under the lock.
+  std::unique_ptr<sdf_tracker::TsdfMap> copyMap(std::vector<sdf_tracker::io::StampedPose>* trajectory);
+  /// A copy of the submaps and their graph (SdfPipeline::copySubmaps), the trajectory so far and
+  /// the place memory (each keyframe in its submap's frame), taken under the lock: what a .sdfmap
+  /// keeps.
+  sdf_tracker::SubmapGraph copySubmaps(std::vector<sdf_tracker::io::StampedPose>* trajectory,
+                                       sdf_tracker::PlaceMemory* places);
+  /// The trajectory so far in ~map_frame, each pose where the pose graph places it now (under the
+  /// caller's lock).
+  std::vector<sdf_tracker::io::StampedPose> placedTrajectory() const;
   void writeTrajectory(const std::vector<sdf_tracker::io::StampedPose>& trajectory) const;
   std::string outputPath(const std::string& requested, const std::string& default_name) const;
 
