@@ -273,8 +273,12 @@ void SdfPipeline::relocalise(const std::optional<Eigen::Isometry3d>& guess) {
   if (!config_.relocalise) throw std::logic_error("relocalisation is off (Relocalise)");
   if (!map_initialised_) throw std::logic_error("nothing is mapped yet: there is nowhere to relocalise in");
   if (guess) {
-    // A camera further from every mapped voxel than it sees cannot be in the map.
-    const Eigen::AlignedBox3d box = mappedBox(*map_).cast<double>();
+    // A camera further from every mapped voxel than it sees cannot be in the map: its submaps,
+    // each where the graph places it (the guess is in the map frame, where the search looks).
+    Eigen::AlignedBox3d box = transformedBox(active_.T_map_W, Eigen::AlignedBox3d(mappedBox(*map_).cast<double>()));
+    for (const Submap& submap : closed_submaps_) {
+      box.extend(transformedBox(submap.place.T_map_W, Eigen::AlignedBox3d(mappedBox(*submap.map).cast<double>())));
+    }
     const Eigen::Vector3d position = guess->translation();
     const Eigen::Vector3d outside = (box.min() - position).cwiseMax(position - box.max()).cwiseMax(0.0);
     const double distance_m = position.allFinite() ? outside.stableNorm() : HUGE_VAL;  // no overflow at 1e300

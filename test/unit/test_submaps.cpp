@@ -364,6 +364,67 @@ TEST(Submaps, ACameraLostAndBackInAnOldSubmapIsFoundInTheWholeMap) {
   EXPECT_TRUE(next.tracked_in_previous_submap) << "the new submap's first frames track in the map the camera was found in";
 }
 
+TEST(Submaps, SavedSubmapsAreTakenUpWhereTheirGraphPlacedThemOrMergedWhereTheyCannotBe) {
+  // Two submaps 10 m apart (the second placed there by its graph), one observed block each.
+  SubmapGraph saved;
+  for (int i = 0; i < 2; ++i) {
+    auto map = std::make_unique<SparseTsdfMap>(sparseLattice(0.03));
+    for (Voxel& voxel : map->allocate(SparseTsdfMap::BlockIndex(0, 0, 0)).voxels) voxel = Voxel{0.01f, 4.0f};
+    SubmapPlace place;
+    place.node = i;
+    place.T_W_anchor.translation() = Eigen::Vector3d(10.0 * i, 0.0, 0.0);
+    place.T_map_W.translation() = Eigen::Vector3d(10.0 * i, 0.0, 0.0);
+    saved.submaps.push_back(Submap{std::move(map), place});
+  }
+  const Eigen::Isometry3d motion = saved.submaps[0].place.T_W_anchor.inverse() * saved.submaps[1].place.T_W_anchor;
+  saved.edges.push_back(PoseEdge{0, 1, motion, PoseInformation::Identity(), PoseEdgeKind::kOdometry});
+  auto copy = [&saved] {
+    SubmapGraph c;
+    for (const Submap& submap : saved.submaps) c.submaps.push_back(Submap{submap.map->clone(), submap.place});
+    c.edges = saved.edges;
+    return c;
+  };
+
+  PipelineConfig config = submapPipeline(1.0, 10);
+  SdfPipeline pipeline(config);
+  pipeline.setSubmaps(copy());
+  ASSERT_EQ(pipeline.submapCount(), 2u);
+  EXPECT_TRUE(pipeline.submapPlace(1).T_map_W.isApprox(saved.submaps[1].place.T_map_W));
+  EXPECT_EQ(pipeline.poseGraph().edges().size(), 1u);
+  EXPECT_FALSE(pipeline.poseKnown());
+  EXPECT_TRUE(pipeline.mapPose().isApprox(Eigen::Isometry3d::Identity())) << "the search starts at the map's start";
+  // A pose given by hand is in the map frame: beside a submap where the graph placed it (the
+  // active one, whose own frame puts its voxels 10 m away), or beside another, but not beside none.
+  for (const double x : {11.0, -1.0}) {
+    Eigen::Isometry3d beside = Eigen::Isometry3d::Identity();
+    beside.translation() = Eigen::Vector3d(x, 0.0, -1.0);
+    EXPECT_NO_THROW(pipeline.relocalise(beside)) << "at x " << x << " m";
+  }
+  Eigen::Isometry3d nowhere = Eigen::Isometry3d::Identity();
+  nowhere.translation() = Eigen::Vector3d(0.0, 40.0, 0.0);
+  EXPECT_THROW(pipeline.relocalise(nowhere), std::invalid_argument);
+
+  // Without submaps, or without the search that finds the camera in them: one map, merged.
+  for (const bool submaps_off : {true, false}) {
+    PipelineConfig one = config;
+    if (submaps_off) one.submaps.max_distance_m = 0.0;
+    else one.relocalise = false;
+    one.loops.enabled = false;
+    SdfPipeline merged(one);
+    merged.setSubmaps(copy());
+    EXPECT_EQ(merged.submapCount(), 1u);
+    float distance_m = 0.0f;
+    EXPECT_TRUE(merged.map().sampleDistance(Eigen::Vector3f(10.1f, 0.1f, 0.1f), &distance_m))
+        << "the second submap's block where its graph placed it";
+    EXPECT_NEAR(distance_m, 0.01f, 1e-5f);
+  }
+  // Submaps that cannot be a map's change nothing.
+  SubmapGraph unjoined = copy();
+  unjoined.edges.clear();
+  EXPECT_THROW(pipeline.setSubmaps(std::move(unjoined)), std::invalid_argument);
+  EXPECT_EQ(pipeline.submapCount(), 2u);
+}
+
 TEST(Submaps, ParametersRefuseWhatSubmapsCannotDoYetByName) {
   Settings dense = preset("default");
   setParameterFromText(&dense, "MapType", "dense");
