@@ -84,7 +84,8 @@ def loops(groundtruth, loops_csv, sigma_m, sigma_deg):
         header = f.readline().strip().split(',')
         for line in f:
             row = dict(zip(header, line.strip().split(',')))
-            if row.get('kept') != '1':
+            # (A loop to a loaded map's submap has no anchor time of this run: not checked.)
+            if row.get('kept') != '1' or not row['from_anchor_time'] or not row['to_anchor_time']:
                 continue
             kept += 1
             measured = pose([float(row[k]) for k in ('tx', 'ty', 'tz', 'qx', 'qy', 'qz', 'qw')])

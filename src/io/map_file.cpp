@@ -110,7 +110,7 @@ std::string describeLoadedSubmaps(const SubmapGraph& saved, const PipelineConfig
                                    [](const PoseEdge& edge) { return edge.kind == PoseEdgeKind::kLoop; });
   const std::string held = "holds " + std::to_string(saved.submaps.size()) + " submaps joined by " +
                            std::to_string(saved.edges.size()) + " edges (" + std::to_string(loops) +
-                           (loops == 1 ? " loop)" : " loops)");
+                           " of them places found again: loops, and where later sessions joined)";
   if (SdfPipeline::keepsSubmaps(config, saved)) {
     return held + ": kept as submaps; the submap where the camera is found joins their pose graph";
   }

@@ -169,6 +169,7 @@ std::string keyframeProblem(const KeyframePose& pose, const uint8_t* code, const
 /// submaps, SubmapGraph::problem).
 std::string edgeProblem(const EdgeRecord& edge) {
   if (edge.kind > 1) return "kind " + std::to_string(edge.kind) + " is neither 0 (odometry) nor 1 (loop)";
+  if (edge.reserved != 0) return "reserved field " + std::to_string(edge.reserved) + " is not 0";
   if (std::string problem = poseProblem(edge.T_from_to); !problem.empty()) return problem;
   const Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> information(edge.information);
   if (!information.allFinite()) return "information holds a value that is not finite";

@@ -252,7 +252,13 @@ SubmapGraph SdfPipeline::copySubmaps() const {
     for (const Submap& submap : closed_submaps_) copy.submaps.push_back(Submap{submap.map->clone(), submap.place});
     copy.submaps.push_back(Submap{map_->clone(), active_});
   }
-  copy.edges = graph_.edges();
+  // The graph as its latest solution placed the submaps: without the loops it rejected, and
+  // without those found since (they are sought again in the next session).
+  for (size_t edge = 0; edge < graph_.edges().size(); ++edge) {
+    const bool loop = std::find(loop_edges_.begin(), loop_edges_.end(), edge) != loop_edges_.end();
+    if (loop && (edge >= solved_edges_ || rejectedByTheGraph(edge))) continue;
+    copy.edges.push_back(graph_.edges()[edge]);
+  }
   copy.keyframe_submaps = keyframe_submaps_;
   return copy;
 }
@@ -487,14 +493,16 @@ void SdfPipeline::startSubmap(bool after_search) {
   active_ = SubmapPlace();
   active_.node = closed.node + 1;
   active_.T_W_anchor = T_W_C_;
-  active_.path_m = closed.path_m + (closed.T_W_anchor.inverse() * T_W_C_).translation().norm();
   if (after_search) {
     // Found in the merged submaps: the pose is in the map frame, and the search's fit joins the
-    // new submap to the one nearest it.
+    // new submap to the one nearest it. No odometry ties it to the others (the way there was not
+    // walked): the join counts as a long path, so that loops to them are sought at once and they
+    // are not tracked with it as recent ones.
     const auto nearest = std::min_element(closed_submaps_.begin(), closed_submaps_.end(), [&](const Submap& a, const Submap& b) {
       return (a.place.T_map_anchor().translation() - T_W_C_.translation()).norm() <
              (b.place.T_map_anchor().translation() - T_W_C_.translation()).norm();
     });
+    active_.path_m = closed.path_m + std::max(config_.loops.min_path_m, config_.submaps.track_recent_m);
     graph_.addNode(active_.T_map_anchor());
     // (The search's covariance is not kept: the loop's own sigma alone.)
     graph_.addEdge(PoseEdge{nearest->place.node, active_.node, nearest->place.T_map_anchor().inverse() * T_W_C_,
@@ -502,6 +510,7 @@ void SdfPipeline::startSubmap(bool after_search) {
                             PoseEdgeKind::kLoop});
   } else {
     // The tracker goes on in the same frame: the odometry between the two anchors.
+    active_.path_m = closed.path_m + (closed.T_W_anchor.inverse() * T_W_C_).translation().norm();
     active_.T_map_W = closed.T_map_W;
     graph_.addNode(active_.T_map_anchor());
     const Eigen::Isometry3d motion = closed.T_W_anchor.inverse() * active_.T_W_anchor;
@@ -803,6 +812,16 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     }
     consecutive_failures_ = 0;
   } else {
+    if (given_T_W_C && pose_unknown_ && !closed_submaps_.empty()) {
+      // A given pose in saved submaps (the tracker alone, measured in a loaded map): in the map
+      // frame, as a search's would be; the frame starts a submap there, joined to the nearest
+      // saved one, and is tracked against them all.
+      T_W_C_ = *given_T_W_C;
+      pose_unknown_ = false;
+      search_map_ = copyWholeMap();
+      startSubmap(true);
+      report.started_submap = true;
+    }
     const auto start = std::chrono::steady_clock::now();
     // The other odometry's motion since the held pose, else constant velocity.
     report.predicted_by_odometry = !given_T_W_C && T_odom_C && T_odom_C_held_;
@@ -875,7 +894,7 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
   held_pose_timestamp_s_ = timestamp_s;
   T_odom_C_held_ = T_odom_C;
 
-  if (config_.submaps.enabled() && !report.initialised_map) {
+  if (config_.submaps.enabled() && !report.initialised_map && !report.started_submap) {
     // Found by a search in the merged submaps: the camera may be anywhere in them, and the
     // active submap need not hold its view.
     const bool found_in_merged = report.relocalisation.outcome == Relocaliser::Outcome::kAccepted && search_map_;

@@ -41,7 +41,7 @@ std::string SubmapGraph::problem(size_t keyframes) const {
     const PoseEdge& edge = edges[e];
     const std::string name = "edge " + std::to_string(e) + " (" + std::to_string(edge.from) + " to " + std::to_string(edge.to) + ")";
     if (edge.from < 0 || edge.from >= count || edge.to < 0 || edge.to >= count) {
-      return name + " names a submap beyond the " + std::to_string(count) + " there are";
+      return name + " names a submap that is none of the " + std::to_string(count) + " there are";
     }
     if (edge.from == edge.to) return name + " joins a submap to itself";
     part[root(edge.from)] = root(edge.to);
@@ -54,8 +54,8 @@ std::string SubmapGraph::problem(size_t keyframes) const {
   }
   for (size_t k = 0; k < keyframe_submaps.size(); ++k) {
     if (keyframe_submaps[k] < 0 || keyframe_submaps[k] >= count) {
-      return "keyframe " + std::to_string(k) + " is of submap " + std::to_string(keyframe_submaps[k]) + ", beyond the " +
-             std::to_string(count) + " there are";
+      return "keyframe " + std::to_string(k) + " is of submap " + std::to_string(keyframe_submaps[k]) +
+             ", none of the " + std::to_string(count) + " there are";
     }
   }
   return "";

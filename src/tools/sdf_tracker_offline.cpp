@@ -262,7 +262,10 @@ int run(int argc, char** argv) {
   frames_csv << "timestamp,status,iterations,rms_residual_m,valid_points,overlap,inverse_condition,constrained_rank,"
                 "tracking_ms,fusion_ms,fused,map_mb,message\n";
   st::TrackedPath path;
-  std::vector<double> anchor_stamps;  // of the frame that started each submap, for loops.csv
+  // Of the frame that started each submap of this run, for loops.csv: nodes before
+  // first_run_node are a loaded map's (their frames are another session's).
+  std::vector<double> anchor_stamps;
+  int first_run_node = args.has("load-volume") ? static_cast<int>(pipeline.submapCount()) : 0;
   std::vector<double> loop_search_ms, optimise_ms;  // frames that searched for a loop; graph solves
   std::vector<double> frame_ms, tracking_ms, fusion_ms, raycast_ms;
   size_t failed = 0, degenerate = 0;
@@ -336,7 +339,10 @@ int run(int argc, char** argv) {
     if (report.reset) {
       path.detachFromSubmaps();
     }
-    if (report.initialised_map) anchor_stamps.clear();
+    if (report.initialised_map) {
+      anchor_stamps.clear();
+      first_run_node = 0;
+    }
     if (report.initialised_map || report.started_submap) anchor_stamps.push_back(sequence.timestamp(i));
     if (t.tracked()) {
       const Eigen::Isometry3d T_W_C = true_T_W_C.empty() ? pipeline.pose() : t.T_W_C;
@@ -410,11 +416,14 @@ int run(int argc, char** argv) {
       const st::PoseEdge& e = loop.edge;
       const Eigen::Quaterniond q(e.T_from_to.rotation());
       const Eigen::Vector3d t = e.T_from_to.translation();
-      auto stamp = [&anchor_stamps](int node) {
-        return node < static_cast<int>(anchor_stamps.size()) ? anchor_stamps[node] : -1.0;
+      auto stamp = [&](int node) {  // empty for a loaded map's submap
+        const int index = node - first_run_node;
+        if (index < 0 || index >= static_cast<int>(anchor_stamps.size())) return std::string();
+        std::ostringstream text;
+        text << std::fixed << std::setprecision(6) << anchor_stamps[index];
+        return text.str();
       };
-      loops_csv << e.from << ',' << e.to << ',' << std::setprecision(6) << stamp(e.from) << ',' << stamp(e.to) << ','
-                << std::setprecision(7) << t.x() << ',' << t.y() << ',' << t.z() << ',' << q.x() << ',' << q.y()
+      loops_csv << e.from << ',' << e.to << ',' << stamp(e.from) << ',' << stamp(e.to) << ',' << std::setprecision(7) << t.x() << ',' << t.y() << ',' << t.z() << ',' << q.x() << ',' << q.y()
                 << ',' << q.z() << ',' << q.w() << ',' << (loop.kept ? 1 : 0) << '\n';
     }
     st::io::writeTextFile(output.path("loops.csv"), loops_csv.str());

@@ -380,7 +380,7 @@ TEST(Io, TheMapFileKeepsThePlaceMemoryAndAFirstVersionFileStillLoads) {
   std::string no_submap = v5;
   const int32_t fourth = 3;
   no_submap.replace(first_keyframe + 56 + 20, sizeof(fourth), reinterpret_cast<const char*>(&fourth), sizeof(fourth));
-  EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(no_submap)), "keyframe 0 is of submap 3, beyond the 1 there are"))
+  EXPECT_TRUE(has(sparseMapError(dir, withValidChecksum(no_submap)), "keyframe 0 is of submap 3, none of the 1 there are"))
       << sparseMapError(dir, withValidChecksum(no_submap));
 }
 
@@ -522,10 +522,11 @@ TEST(Io, TheMapFileKeepsTheSubmapsTheirGraphAndEachKeyframesSubmap) {
     bytes.replace(at, sizeof(value), reinterpret_cast<const char*>(&value), sizeof(value));
     return sparseMapError(dir, withValidChecksum(bytes));
   };
-  EXPECT_TRUE(has(edited(first_edge + 4, int32_t{5}), "edge 0 (0 to 5) names a submap beyond the 3 there are"))
+  EXPECT_TRUE(has(edited(first_edge + 4, int32_t{5}), "edge 0 (0 to 5) names a submap that is none of the 3 there are"))
       << edited(first_edge + 4, int32_t{5});
   EXPECT_TRUE(has(edited(first_edge + 4, int32_t{0}), "edge 0 (0 to 0) joins a submap to itself"));
   EXPECT_TRUE(has(edited(first_edge + test::kSdfmapEdgeRecord + 8, uint32_t{2}), "edge 1: kind 2 is neither"));
+  EXPECT_TRUE(has(edited(first_edge + 12, uint32_t{7}), "edge 0: reserved field 7 is not 0"));
   const size_t loop_information = first_edge + 2 * test::kSdfmapEdgeRecord + 72;
   EXPECT_TRUE(has(edited(loop_information + 8 * 4, 3.6), "edge 2: information is not symmetric"))
       << edited(loop_information + 8 * 4, 3.6);

@@ -357,6 +357,11 @@ TEST(LoopClosure, ASecondSessionInTheSavedSubmapsAddsToTheirGraph) {
   const PoseEdge& join = edges[saved_edges];
   EXPECT_LT(join.from, saved_submaps);
   EXPECT_EQ(join.to, saved_submaps);
+  EXPECT_EQ(join.kind, PoseEdgeKind::kLoop) << "a place found again, not odometry";
+  // No odometry ties it to the saved submaps (the way there was not walked): loops to them are
+  // sought at once, whatever path the first session had walked between them.
+  EXPECT_EQ(second.submapPlace(join.to).path_m - second.submapPlace(saved_submaps - 1).path_m,
+            std::max(first.config().loops.min_path_m, first.config().submaps.track_recent_m));
   EXPECT_GT(static_cast<int>(second.submapCount()), saved_submaps + 1) << "the session went on in submaps of its own";
   // In the first session's map frame (the truth's frame is the first camera's, as the map's is):
   // as near the truth as the first session's graph placed its own poses of the same views.
@@ -370,6 +375,26 @@ TEST(LoopClosure, ASecondSessionInTheSavedSubmapsAddsToTheirGraph) {
             << " submaps of its own; published at most " << worst_m * 1e3 << " mm from the truth (the first session's "
             << "graph placed its own poses there at most " << map_worst_m * 1e3 << " mm from it)\n";
   EXPECT_LT(worst_m, map_worst_m + 0.03) << "the second session is not where the saved map places its views";
+
+  // Given poses (the tracker alone, measured in the saved map): the first is in the map frame,
+  // and starts a submap there joined to a saved one, tracked against all of them.
+  io::LoadedMap again = io::loadMap(dir + "/map.sdfmap", false, first.config().places);
+  SdfPipeline given(loopPipeline(0.5));
+  given.setSubmaps(std::move(again.submaps), std::move(again.places));
+  const PinholeCamera camera = test::testCamera().scaledTo(160, 120);
+  synthetic::NoiseModel biased;
+  biased.enabled = false;
+  biased.depth_bias = 0.04;
+  const Eigen::Isometry3d T_scene_C = synthetic::cameraPose(synthetic::Motion::kLoop, start * kFramePeriod_s, kCirclePeriod_s);
+  const Eigen::Isometry3d placed = first.submapPlace(circle().run.in_submaps[start].first).T_map_W * circle().run.in_submaps[start].second;
+  const FrameReport report = given.processFrameAtPose(synthetic::Scene::indoorRoom().render(camera, T_scene_C, biased, 0),
+                                                      camera, placed, start * kFramePeriod_s);
+  EXPECT_TRUE(report.started_submap);
+  EXPECT_TRUE(report.track.ok()) << report.track.message;
+  EXPECT_LT(positionError(report.track.T_W_C, placed), 0.02) << "tracked against the saved submaps where they lie";
+  ASSERT_EQ(given.poseGraph().edges().size(), saved_edges + 1);
+  EXPECT_EQ(given.poseGraph().edges().back().kind, PoseEdgeKind::kLoop);
+  EXPECT_EQ(given.poseGraph().edges().back().to, saved_submaps);
 }
 
 TEST(LoopClosure, ParametersRefuseLoopsWithoutSubmapsByName) {
