@@ -80,6 +80,13 @@ void PoseGraph::setPose(int node, const Eigen::Isometry3d& T_map_node) {
   poses_[node] = T_map_node;
 }
 
+std::string informationProblem(const PoseInformation& information) {
+  if (!information.allFinite()) return "not finite";
+  if (!information.isApprox(information.transpose(), 1e-9)) return "not symmetric";
+  if (information.llt().info() != Eigen::Success) return "not positive definite";
+  return "";
+}
+
 void PoseGraph::addEdge(const PoseEdge& edge) {
   const int nodes = static_cast<int>(poses_.size());
   auto refuse = [&edge](const std::string& why) { throw std::invalid_argument(describeEdge(edge) + ": " + why); };
@@ -88,9 +95,9 @@ void PoseGraph::addEdge(const PoseEdge& edge) {
   }
   if (edge.from == edge.to) refuse("an edge joins two different nodes");
   if (!edge.T_from_to.matrix().allFinite()) refuse("the relative pose is not finite");
-  if (!edge.information.allFinite()) refuse("the information matrix is not finite");
-  if (!edge.information.isApprox(edge.information.transpose(), 1e-9)) refuse("the information matrix is not symmetric");
-  if (edge.information.llt().info() != Eigen::Success) refuse("the information matrix is not positive definite");
+  if (const std::string why = informationProblem(edge.information); !why.empty()) {
+    refuse("the information matrix is " + why);
+  }
   edges_.push_back(edge);
 }
 

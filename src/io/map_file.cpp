@@ -6,7 +6,6 @@
 #include "sdf_tracker/io/files.h"
 #include "sdf_tracker/io/sdfmap_file.h"
 #include "sdf_tracker/io/vti_file.h"
-#include "sdf_tracker/map/map_merge.h"
 #include "sdf_tracker/map/sparse_tsdf_map.h"
 #include "sdf_tracker/map/tsdf_volume.h"
 
@@ -20,15 +19,17 @@ namespace {
 
 /// A map in which nothing was ever observed cannot be tracked against: the camera would never be
 /// found in it.
-void refuseEmpty(const std::string& path, const TsdfMap& map) {
-  if (map.observesNothing()) throwFileError(path, "an empty map: no voxel holds an observation, nothing to track against");
+void refuseEmpty(const std::string& path, bool observes_nothing) {
+  if (observes_nothing) throwFileError(path, "an empty map: no voxel holds an observation, nothing to track against");
 }
+
+constexpr char kNothingMappedYet[] = "not written: nothing is mapped yet (no voxel holds an observation)";
 
 }  // namespace
 
 void writeMap(const std::string& path, const TsdfMap& map, const PlaceMemory* places,
               const std::optional<Eigen::Isometry3d>& T_map_W) {
-  if (map.observesNothing()) throwFileError(path, "not written: nothing is mapped yet (no voxel holds an observation)");
+  if (map.observesNothing()) throwFileError(path, kNothingMappedYet);
   if (hasExtension(path, ".sdfmap")) {
     if (map.type() == MapType::kSparse) writeSparseMap(path, static_cast<const SparseTsdfMap&>(map), places, T_map_W);
     else writeSparseMap(path, toSparseMap(map), places, T_map_W);
@@ -41,18 +42,12 @@ void writeMap(const std::string& path, const TsdfMap& map, const PlaceMemory* pl
 
 void writeMap(const std::string& path, const SubmapGraph& saved, const PlaceMemory* places,
               const std::optional<Eigen::Isometry3d>& T_map_W) {
-  const bool observed = std::any_of(saved.submaps.begin(), saved.submaps.end(),
-                                    [](const Submap& submap) { return submap.map && !submap.map->observesNothing(); });
-  if (!observed) throwFileError(path, "not written: nothing is mapped yet (no voxel holds an observation)");
+  if (saved.observesNothing()) throwFileError(path, kNothingMappedYet);
   if (hasExtension(path, ".sdfmap")) {
     writeSubmaps(path, saved, places, T_map_W);
   } else if (hasExtension(path, ".vti")) {
     if (saved.submaps.size() == 1) return writeVti(path, toDenseVolume(*saved.submaps.front().map));
-    std::vector<PlacedMap> parts;
-    for (const Submap& submap : saved.submaps) {
-      parts.push_back({&static_cast<const SparseTsdfMap&>(*submap.map), submap.place.T_map_W});
-    }
-    writeVti(path, toDenseVolume(mergeMaps(parts)));
+    writeVti(path, toDenseVolume(mergeSubmaps(saved.submaps)));
   } else {
     failUnknownMapExtension(path);
   }
@@ -64,9 +59,7 @@ LoadedMap loadMap(const std::string& path, bool compact_voxels, const PlaceMemor
   LoadedMap loaded;
   if (hasExtension(path, ".sdfmap")) {
     SavedMap saved = readSubmaps(path);
-    const bool observed = std::any_of(saved.submaps.submaps.begin(), saved.submaps.submaps.end(),
-                                      [](const Submap& submap) { return !submap.map->observesNothing(); });
-    if (!observed) refuseEmpty(path, *saved.submaps.submaps.front().map);
+    refuseEmpty(path, saved.submaps.observesNothing());
     if (saved.places) {
       PlaceMemoryConfig config = places_config;
       config.descriptor = saved.places->descriptor;
@@ -80,7 +73,7 @@ LoadedMap loadMap(const std::string& path, bool compact_voxels, const PlaceMemor
   }
   if (readsAsDenseGrid(path)) {
     auto map = std::make_unique<TsdfVolume>(readVti(path, compact_voxels));
-    refuseEmpty(path, *map);
+    refuseEmpty(path, map->observesNothing());
     loaded.submaps.submaps.push_back(Submap{std::move(map), SubmapPlace()});
     return loaded;
   }

@@ -106,6 +106,8 @@ static_assert(sizeof(MapFileHeader) == 64 && sizeof(PlacesHeader) == 48 && sizeo
                   sizeof(VoxelColour) == 4,
               "the .sdfmap layout is fixed");
 constexpr size_t kBlockColourBytes = kBlockVoxels * sizeof(VoxelColour);
+/// A record read without a number of its kind (a header).
+constexpr uint64_t kNoRecordNumber = UINT64_MAX;
 
 KeyframePose poseRecordOf(const Eigen::Isometry3d& T) {
   KeyframePose pose;
@@ -171,13 +173,9 @@ std::string edgeProblem(const EdgeRecord& edge) {
   if (edge.kind > 1) return "kind " + std::to_string(edge.kind) + " is neither 0 (odometry) nor 1 (loop)";
   if (edge.reserved != 0) return "reserved field " + std::to_string(edge.reserved) + " is not 0";
   if (std::string problem = poseProblem(edge.T_from_to); !problem.empty()) return problem;
-  const Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>> information(edge.information);
-  if (!information.allFinite()) return "information holds a value that is not finite";
-  if (!information.isApprox(information.transpose(), 1e-9)) return "information is not symmetric";
-  if (Eigen::LLT<Eigen::Matrix<double, 6, 6>>(information).info() != Eigen::Success) {
-    return "information is not positive definite";
-  }
-  return "";
+  const std::string why =
+      informationProblem(Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(edge.information));
+  return why.empty() ? "" : "information is " + why;
 }
 
 /// A submap to write: its blocks and its place.
@@ -322,13 +320,18 @@ SavedMap readSubmaps(const std::string& path) {
   Fnv1a hash;
   hash.add(&header, sizeof(header));
   uint64_t headers = sizeof(header);
-  // Reads a fixed record that the version holds, hashed.
+  // Reads `bytes` into `data`, hashed; a short read fails naming `what` (and its number).
+  auto readHashed = [&](void* data, size_t bytes, const char* what, uint64_t number = kNoRecordNumber) {
+    if (!in.read(static_cast<char*>(data), static_cast<std::streamsize>(bytes))) {
+      throwFileError(path, std::string("read failed in ") + what + (number == kNoRecordNumber ? "" : " " + std::to_string(number)));
+    }
+    hash.add(data, bytes);
+  };
+  // Reads a fixed record that the version holds, before the file's length is checked.
   auto readRecord = [&](void* record, size_t bytes, const char* where) {
     headers += bytes;
-    if (file_bytes < headers || !in.read(static_cast<char*>(record), static_cast<std::streamsize>(bytes))) {
-      throwFileError(path, std::string("truncated in ") + where);
-    }
-    hash.add(record, bytes);
+    if (file_bytes < headers) throwFileError(path, std::string("truncated in ") + where);
+    readHashed(record, bytes, where);
   };
   // Version 2: the place memory's header, and what its keyframes take.
   PlacesHeader places_header{};
@@ -402,8 +405,7 @@ SavedMap readSubmaps(const std::string& path) {
     uint64_t blocks_listed = 0;
     for (uint64_t i = 0; i < counts.submap_count; ++i) {
       SubmapRecord record;
-      if (!in.read(reinterpret_cast<char*>(&record), sizeof(record))) throwFileError(path, "read failed in submap " + std::to_string(i));
-      hash.add(&record, sizeof(record));
+      readHashed(&record, sizeof(record), "submap", i);
       const std::string name = "submap " + std::to_string(i);
       for (const auto& [pose, what] : {std::pair{&record.T_W_anchor, "anchor"}, std::pair{&record.T_map_W, "place"}}) {
         if (const std::string problem = poseProblem(*pose); !problem.empty()) throwFileError(path, name + ": " + what + ": " + problem);
@@ -434,8 +436,7 @@ SavedMap readSubmaps(const std::string& path) {
     }
     for (uint64_t e = 0; e < counts.edge_count; ++e) {
       EdgeRecord record;
-      if (!in.read(reinterpret_cast<char*>(&record), sizeof(record))) throwFileError(path, "read failed in edge " + std::to_string(e));
-      hash.add(&record, sizeof(record));
+      readHashed(&record, sizeof(record), "edge", e);
       if (const std::string problem = edgeProblem(record); !problem.empty()) {
         throwFileError(path, "edge " + std::to_string(e) + ": " + problem);
       }
@@ -459,10 +460,7 @@ SavedMap readSubmaps(const std::string& path) {
       auto map = std::make_unique<SparseTsdfMap>(config);
       if (colour.holds_colour) map->enableColour();
       for (uint64_t end = b + submap_blocks[i]; b < end; ++b) {
-        if (!in.read(reinterpret_cast<char*>(record.get()), sizeof(MapFileBlock))) {
-          throwFileError(path, "read failed in block " + std::to_string(b));
-        }
-        hash.add(record.get(), sizeof(MapFileBlock));
+        readHashed(record.get(), sizeof(MapFileBlock), "block", b);
         const SparseTsdfMap::BlockIndex index(record->index[0], record->index[1], record->index[2]);
         std::ostringstream where;
         where << "block " << b << " at (" << index.transpose() << ")";
@@ -475,12 +473,7 @@ SavedMap readSubmaps(const std::string& path) {
         }
         VoxelBlock& block = map->allocate(index);
         std::copy(record->voxels, record->voxels + kBlockVoxels, block.voxels.begin());
-        if (colour.holds_colour) {
-          if (!in.read(reinterpret_cast<char*>(block.colours.data()), kBlockColourBytes)) {
-            throwFileError(path, "read failed in the colours of block " + std::to_string(b));
-          }
-          hash.add(block.colours.data(), kBlockColourBytes);
-        }
+        if (colour.holds_colour) readHashed(block.colours.data(), kBlockColourBytes, "the colours of block", b);
       }
       saved.submaps.submaps[i].map = std::move(map);
     }
@@ -493,14 +486,9 @@ SavedMap readSubmaps(const std::string& path) {
   for (uint64_t k = 0; k < places_header.keyframe_count; ++k) {
     KeyframePose pose;
     int32_t submap = 0;
-    if (!in.read(reinterpret_cast<char*>(&pose), sizeof(pose)) ||
-        !in.read(reinterpret_cast<char*>(code.data()), static_cast<std::streamsize>(code.size())) ||
-        (has_submaps && !in.read(reinterpret_cast<char*>(&submap), sizeof(submap)))) {
-      throwFileError(path, "read failed in keyframe " + std::to_string(k));
-    }
-    hash.add(&pose, sizeof(pose));
-    hash.add(code.data(), code.size());
-    if (has_submaps) hash.add(&submap, sizeof(submap));
+    readHashed(&pose, sizeof(pose), "keyframe", k);
+    readHashed(code.data(), code.size(), "keyframe", k);
+    if (has_submaps) readHashed(&submap, sizeof(submap), "keyframe", k);
     const std::string problem = keyframeProblem(pose, code.data(), descriptor);
     if (!problem.empty()) throwFileError(path, "keyframe " + std::to_string(k) + ": " + problem);
     Keyframe keyframe;

@@ -77,12 +77,6 @@ VolumeConfig placedVolume(const PipelineConfig& config) {
   return volume;
 }
 
-/// A submap as a part of a merge, placed by T_target_W. Submaps are sparse maps without a budget
-/// (PipelineConfig::validate).
-PlacedMap placedSubmap(const TsdfMap& submap, const Eigen::Isometry3d& T_target_W) {
-  return {&static_cast<const SparseTsdfMap&>(submap), T_target_W};
-}
-
 }  // namespace
 
 std::vector<std::string> PipelineConfig::validate() const {
@@ -221,9 +215,7 @@ void SdfPipeline::setSubmaps(SubmapGraph saved, std::unique_ptr<PlaceMemory> pla
   PoseGraph graph;
   for (const Submap& submap : saved.submaps) graph.addNode(submap.place.T_map_anchor());
   for (const PoseEdge& edge : saved.edges) graph.addEdge(edge);
-  const bool observed = std::any_of(saved.submaps.begin(), saved.submaps.end(),
-                                    [](const Submap& submap) { return !submap.map->observesNothing(); });
-  if (!observed) throw std::invalid_argument("the saved submaps hold no observed voxel: nothing to track against");
+  if (saved.observesNothing()) throw std::invalid_argument("the saved submaps hold no observed voxel: nothing to track against");
   clearSubmaps();
   map_ = std::move(saved.submaps.back().map);
   active_ = saved.submaps.back().place;

@@ -1,10 +1,9 @@
 #include "sdf_tracker/pipeline/submaps.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
-
-#include "sdf_tracker/map/map_merge.h"
 
 #include "sdf_tracker/util/se3.h"
 #include "sdf_tracker/util/validation.h"
@@ -61,19 +60,27 @@ std::string SubmapGraph::problem(size_t keyframes) const {
   return "";
 }
 
-std::unique_ptr<TsdfMap> mergeSubmaps(std::vector<Submap> submaps) {
-  if (submaps.empty()) throw std::invalid_argument("mergeSubmaps: no submap");
+PlacedMap placedSubmap(const TsdfMap& submap, const Eigen::Isometry3d& T_target_W) {
+  if (submap.type() != MapType::kSparse) throw std::invalid_argument("a dense grid cannot be merged as a submap");
+  return {&static_cast<const SparseTsdfMap&>(submap), T_target_W};
+}
+
+SparseTsdfMap mergeSubmaps(const std::vector<Submap>& submaps) {
+  std::vector<PlacedMap> parts;
+  for (const Submap& submap : submaps) parts.push_back(placedSubmap(*submap.map, submap.place.T_map_W));
+  return mergeMaps(parts);
+}
+
+std::unique_ptr<TsdfMap> mergeSubmaps(std::vector<Submap>&& submaps) {
   if (submaps.size() == 1 && submaps.front().place.T_map_W.isApprox(Eigen::Isometry3d::Identity(), 1e-12)) {
     return std::move(submaps.front().map);
   }
-  std::vector<PlacedMap> parts;
-  for (const Submap& submap : submaps) {
-    if (!submap.map || submap.map->type() != MapType::kSparse) {
-      throw std::invalid_argument("mergeSubmaps: submaps are sparse maps");
-    }
-    parts.push_back({&static_cast<const SparseTsdfMap&>(*submap.map), submap.place.T_map_W});
-  }
-  return std::make_unique<SparseTsdfMap>(mergeMaps(parts));
+  return std::make_unique<SparseTsdfMap>(mergeSubmaps(static_cast<const std::vector<Submap>&>(submaps)));
+}
+
+bool SubmapGraph::observesNothing() const {
+  return std::none_of(submaps.begin(), submaps.end(),
+                      [](const Submap& submap) { return submap.map && !submap.map->observesNothing(); });
 }
 
 std::unique_ptr<PlaceMemory> placesInMapFrame(const PlaceMemory& places, const std::vector<int>& keyframe_submaps,

@@ -423,8 +423,9 @@ int run(int argc, char** argv) {
         text << std::fixed << std::setprecision(6) << anchor_stamps[index];
         return text.str();
       };
-      loops_csv << e.from << ',' << e.to << ',' << stamp(e.from) << ',' << stamp(e.to) << ',' << std::setprecision(7) << t.x() << ',' << t.y() << ',' << t.z() << ',' << q.x() << ',' << q.y()
-                << ',' << q.z() << ',' << q.w() << ',' << (loop.kept ? 1 : 0) << '\n';
+      loops_csv << e.from << ',' << e.to << ',' << stamp(e.from) << ',' << stamp(e.to) << ',' << std::setprecision(7)
+                << t.x() << ',' << t.y() << ',' << t.z() << ',' << q.x() << ',' << q.y() << ',' << q.z() << ','
+                << q.w() << ',' << (loop.kept ? 1 : 0) << '\n';
     }
     st::io::writeTextFile(output.path("loops.csv"), loops_csv.str());
   }

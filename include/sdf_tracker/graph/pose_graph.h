@@ -12,6 +12,10 @@ namespace sdf_tracker {
 /// as measured.
 using PoseInformation = Eigen::Matrix<double, 6, 6>;
 
+/// Why `information` cannot be an edge's ("" when it can): "not finite", "not symmetric", "not
+/// positive definite". The one rule for PoseGraph::addEdge and a saved graph's reader.
+std::string informationProblem(const PoseInformation& information);
+
 /// What an edge of the pose graph was measured by.
 enum class PoseEdgeKind {
   kOdometry,  ///< consecutive nodes, from tracking (or a robot's odometry): trusted as measured

@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "sdf_tracker/graph/pose_graph.h"
+#include "sdf_tracker/map/map_merge.h"
 #include "sdf_tracker/map/tsdf_map.h"
 #include "sdf_tracker/places/place_memory.h"
 
@@ -83,12 +84,18 @@ struct SubmapGraph {
   std::string problem(size_t keyframes) const;
   /// `places` (of these submaps) with each keyframe in the map frame.
   std::unique_ptr<PlaceMemory> placesInMapFrame(const PlaceMemory& places) const;
+  /// No submap holds an observed voxel (or there is none).
+  bool observesNothing() const;
 };
 
+/// A submap as a part of a merge (mergeMaps), placed by T_target_W. Submaps are sparse maps.
+PlacedMap placedSubmap(const TsdfMap& submap, const Eigen::Isometry3d& T_target_W);
 /// The submaps as one map in the map frame, each where the graph places it (mergeMaps: one
-/// surface where two overlap); one at the map frame's identity is handed over as it is (a grid
-/// too). Throws std::invalid_argument for none.
-std::unique_ptr<TsdfMap> mergeSubmaps(std::vector<Submap> submaps);
+/// surface where two overlap). Throws std::invalid_argument for none, or a dense grid among them.
+SparseTsdfMap mergeSubmaps(const std::vector<Submap>& submaps);
+/// mergeSubmaps(), but one submap at the map frame's identity is handed over as it is (a grid
+/// too).
+std::unique_ptr<TsdfMap> mergeSubmaps(std::vector<Submap>&& submaps);
 
 /// `places` with each keyframe moved from its submap's frame (`keyframe_submaps`) into the map
 /// frame, where T_map_W[submap] places that submap's.
