@@ -32,6 +32,7 @@ std::vector<std::string> LoopClosureConfig::validate() const {
   v.requireInRange("min_submap_age", min_submap_age, 2, 100000);
   v.requireNonNegative("min_path_m", min_path_m);
   v.requirePositive("search_radius_m", search_radius_m);
+  v.requirePositive("max_drift_m", max_drift_m);
   v.requireInRange("search_angle_deg", search_angle_deg, 1.0, 180.0);
   v.requireInRange("max_search_frames", max_search_frames, 1, 1000);
   v.requireInRange("retry_after_frames", retry_after_frames, 0, 100000);
@@ -198,13 +199,13 @@ LoopDetector::Step LoopDetector::conclude(Outcome outcome) {
   // However well it fits, a place further from the graph's guess than the search reached is not
   // the one looked for.
   const Eigen::Isometry3d offset = outcome.job.guess.inverse() * found.T_W_C;
-  const bool plausible = offset.translation().norm() <= config_.search_radius_m &&
+  const bool plausible = offset.translation().norm() <= config_.max_drift_m &&
                          rotationAngle(offset) <= config_.search_angle_deg * kRadPerDeg;
   if (accepted && plausible) {
     result.match = LoopMatch{search_submap_, found.T_W_C, found.track.covariance};
   } else if (accepted || search_frames_ >= config_.max_search_frames ||
              found.outcome == Relocaliser::Outcome::kAmbiguous) {
-    result.message = accepted ? "found further from where the graph puts it than search_radius_m"
+    result.message = accepted ? "found further from where the graph puts it than max_drift_m"
                               : (found.message.empty() ? std::string(toString(found.outcome)) : found.message);
   } else {
     return result;  // still confirming or searching

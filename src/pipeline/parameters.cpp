@@ -388,9 +388,14 @@ std::vector<ParameterSpec> buildTable() {
                           [](auto& s) -> auto& { return s.pipeline.loops.enabled; }));
   t.push_back(bound<double>("LoopSearchRadius", "m",
                             "with LoopClosure: keyframes of older submaps this close to the camera, where the graph "
-                            "places them, are loop candidates (the drift since must be within it)",
+                            "places them, are loop candidates",
                             closed(0.05, 100.0), same(2.0), kAtStart, kAll,
                             [](auto& s) -> auto& { return s.pipeline.loops.search_radius_m; }));
+  t.push_back(bound<double>("LoopMaxDrift", "m",
+                            "with LoopClosure: a place found further than this from where the graph puts the camera "
+                            "is refused as a loop, however well it fits (the drift since must be within it)",
+                            closed(0.05, 100.0), same(2.0), kAtStart, kAll,
+                            [](auto& s) -> auto& { return s.pipeline.loops.max_drift_m; }));
   t.push_back(bound<int>("LoopCheckFrames", "frames",
                          "with LoopClosure: a tracked frame is looked at for a loop every this many frames",
                          closed(1, 100000), same(15), kAtStart, kAll,
@@ -535,7 +540,7 @@ std::vector<std::string> Settings::withoutEffect(const std::vector<std::string>&
     }
   }
   if (!pipeline.loops.enabled) {
-    for (const char* name : {"LoopSearchRadius", "LoopCheckFrames"}) {
+    for (const char* name : {"LoopSearchRadius", "LoopMaxDrift", "LoopCheckFrames"}) {
       if (!isGiven(given, name)) continue;
       notes.push_back(std::string(name) + "=" + toText(findParameter(name)->get(*this)) +
                       " has no effect without LoopClosure=true; set it too");

@@ -381,6 +381,10 @@ int run(int argc, char** argv) {
     if (!report.swap_notice.empty()) std::cout << "\n" << report.swap_notice << "\n";
     if (!report.swap_warning.empty()) std::cerr << "\nframe " << i << ": warning: " << report.swap_warning << "\n";
     std::string message = t.message;
+    if (report.loop.searched && !report.loop.message.empty()) {
+      message += (message.empty() ? "" : "; ") + std::string("loop search in submap ") +
+                 std::to_string(report.loop.submap) + ": " + report.loop.message;
+    }
     if (!report.swap_error.empty()) {
       // Said once as it happens (every frame after it may fail alike); each frame's is in frames.csv.
       if (swap_errors++ == 0) {

@@ -87,24 +87,40 @@ TEST(LoopClosure, ALoopHoldsNothingAlongADirectionItsFitLeftUnconstrained) {
   }
 }
 
-TEST(LoopDetector, SearchesAFrameInTheBackgroundAndReportsItAtALaterOne) {
-  // An old submap (0) of the room mapped along the desk path, one after it (1) that saw nothing
-  // alike, and the active one (2), 5 m of path on: the camera is back on the desk path, where the
-  // graph (no correction yet) puts it in submap 0.
-  const PipelineConfig config = preset("default").pipeline;
-  const PinholeCamera camera = test::testCamera();
-  auto desk = [](double t_s) { return synthetic::cameraPose(synthetic::Motion::kDesk, t_s, 10.0); };
-  SdfPipeline mapping(config);
-  for (double t = 0.0; t < 3.0; t += 1.0 / 6.0) mapping.processFrameAtPose(test::renderRoom(desk(t), camera), camera, desk(t), t);
+/// An old submap (0) of the room mapped along the desk path, one after it (1) that saw nothing
+/// alike, and the active one (2), 5 m of path on: the camera back on the desk path.
+struct DeskSubmaps {
+  PipelineConfig config = preset("default").pipeline;
+  PinholeCamera camera = test::testCamera();
+  SdfPipeline mapping{config};
   std::vector<Submap> closed;
-  closed.push_back(Submap{mapping.copyWholeMap(), SubmapPlace()});
-  closed.push_back(Submap{makeMap(config.volume), SubmapPlace()});
-  closed[1].place.node = 1;
-  closed[1].place.path_m = 1.0;
   SubmapPlace active;
-  active.node = 2;
-  active.path_m = 5.0;
-  const std::vector<int> keyframe_submaps(mapping.places().keyframes().size(), 0);
+  std::vector<int> keyframe_submaps;
+
+  static Eigen::Isometry3d desk(double t_s) { return synthetic::cameraPose(synthetic::Motion::kDesk, t_s, 10.0); }
+
+  DeskSubmaps() {
+    for (double t = 0.0; t < 3.0; t += 1.0 / 6.0) mapping.processFrameAtPose(test::renderRoom(desk(t), camera), camera, desk(t), t);
+    closed.push_back(Submap{mapping.copyWholeMap(), SubmapPlace()});
+    closed.push_back(Submap{makeMap(config.volume), SubmapPlace()});
+    closed[1].place.node = 1;
+    closed[1].place.path_m = 1.0;
+    active.node = 2;
+    active.path_m = 5.0;
+    keyframe_submaps.assign(mapping.places().keyframes().size(), 0);
+  }
+};
+
+TEST(LoopDetector, SearchesAFrameInTheBackgroundAndReportsItAtALaterOne) {
+  // The graph (no correction yet) puts the camera where it is in submap 0.
+  DeskSubmaps desks;
+  const PipelineConfig& config = desks.config;
+  const PinholeCamera& camera = desks.camera;
+  auto desk = &DeskSubmaps::desk;
+  const SdfPipeline& mapping = desks.mapping;
+  const std::vector<Submap>& closed = desks.closed;
+  const SubmapPlace& active = desks.active;
+  const std::vector<int>& keyframe_submaps = desks.keyframe_submaps;
   ASSERT_FALSE(keyframe_submaps.empty());
 
   LoopClosureConfig loops;
@@ -140,6 +156,39 @@ TEST(LoopDetector, SearchesAFrameInTheBackgroundAndReportsItAtALaterOne) {
   EXPECT_LT(rotationAngle(error), 0.01);
   detector.reset();
   EXPECT_FALSE(detector.finish().searched) << "reset() ends the search, and drops its running step";
+}
+
+TEST(LoopDetector, RefusesAPlaceFurtherFromTheGraphsGuessThanTheDriftCanBe) {
+  // The graph puts submap 0 1 m from where the camera's path really lies in it: its keyframes are
+  // within LoopSearchRadius of the camera, so it is searched, and the relocaliser finds the camera
+  // from them; found 1 m from the graph's guess, the place is a loop only if max_drift_m reaches it.
+  for (const double max_drift_m : {0.5, 2.0}) {
+    DeskSubmaps desks;
+    ASSERT_FALSE(desks.keyframe_submaps.empty());
+    desks.closed[0].place.T_map_W.translation() = Eigen::Vector3d(1.0, 0.0, 0.0);
+    LoopClosureConfig loops;
+    loops.check_interval_frames = 1;
+    loops.max_drift_m = max_drift_m;
+    LoopDetector detector(loops, desks.config.relocaliser, desks.config.tracker, desks.config.places);
+    std::optional<LoopDetector::Step> ended;  // the first search that ended: a match or why not
+    for (int frame = 0; frame < 90 && !ended; ++frame) {
+      const Eigen::Isometry3d T_W_C = DeskSubmaps::desk(1.5 + frame / 30.0);
+      const LoopDetector::Step step = detector.step(test::renderRoom(T_W_C, desks.camera), desks.camera, T_W_C,
+                                                    desks.active, desks.closed, desks.mapping.places(),
+                                                    desks.keyframe_submaps);
+      if (step.searched && (step.match || !step.message.empty())) ended = step;
+    }
+    if (!ended) ended = detector.finish();
+    ASSERT_TRUE(ended && ended->searched) << "max_drift_m " << max_drift_m << ": no search ended";
+    if (max_drift_m < 1.0) {
+      EXPECT_FALSE(ended->match) << "a place 1 m from the graph's guess was taken with max_drift_m " << max_drift_m;
+      EXPECT_NE(ended->message.find("max_drift_m"), std::string::npos) << ended->message;
+    } else {
+      ASSERT_TRUE(ended->match) << "max_drift_m " << max_drift_m << ": " << ended->message;
+      const Eigen::Isometry3d error = ended->T_W_C.inverse() * ended->match->T_S_C;
+      EXPECT_LT(error.translation().norm(), 0.01);
+    }
+  }
 }
 
 /// The default preset of 3 cm voxels, with submaps every `submap_m` and loops closed.

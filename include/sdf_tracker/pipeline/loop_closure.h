@@ -30,9 +30,14 @@ struct LoopClosureConfig {
   /// over a shorter path corrects little drift, and joins views the odometry already holds.
   double min_path_m = 4.0;
   /// Keyframes of older submaps within this distance and turn of the camera (where the graph
-  /// places them) are the candidates: the drift since must be within it.
+  /// places them) are the candidates. (4 m, views across a room, found more loops and one of them
+  /// false on the 3 % round trip: bench/results/2026-12-07_loop_search_radius.md.)
   double search_radius_m = 2.0;
   double search_angle_deg = 60.0;
+  /// A place found further than this from where the graph puts the camera in the old submap (or
+  /// turned further than search_angle_deg) is refused, however well it fits: the drift since
+  /// must be within it.
+  double max_drift_m = 2.0;
   /// A loop search that has not accepted after this many frames is given up (the relocaliser's
   /// confirmation takes RelocaliserConfig::confirm_frames of them), and the next check waits
   /// retry_after_frames.
