@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 #include <Eigen/Eigenvalues>
@@ -196,17 +197,21 @@ LoopDetector::Step LoopDetector::conclude(Outcome outcome) {
   result.searched = true;
   const Relocaliser::Step& found = outcome.found;
   const bool accepted = found.outcome == Relocaliser::Outcome::kAccepted;
-  // However well it fits, a place further from the graph's guess than the search reached is not
-  // the one looked for.
+  // However well it fits, a place further from the graph's guess than the drift can have taken
+  // the camera is not the one looked for.
   const Eigen::Isometry3d offset = outcome.job.guess.inverse() * found.T_W_C;
-  const bool plausible = offset.translation().norm() <= config_.max_drift_m &&
-                         rotationAngle(offset) <= config_.search_angle_deg * kRadPerDeg;
+  const double drift_m = offset.translation().norm();
+  const double drift_deg = rotationAngle(offset) / kRadPerDeg;
+  const bool plausible = drift_m <= config_.max_drift_m && drift_deg <= config_.search_angle_deg;
   if (accepted && plausible) {
     result.match = LoopMatch{search_submap_, found.T_W_C, found.track.covariance};
-  } else if (accepted || search_frames_ >= config_.max_search_frames ||
-             found.outcome == Relocaliser::Outcome::kAmbiguous) {
-    result.message = accepted ? "found further from where the graph puts it than max_drift_m"
-                              : (found.message.empty() ? std::string(toString(found.outcome)) : found.message);
+  } else if (accepted) {
+    std::ostringstream why;
+    why << "found " << drift_m << " m and " << drift_deg << " deg from where the graph puts the camera, beyond max_drift_m ("
+        << config_.max_drift_m << " m) or search_angle_deg (" << config_.search_angle_deg << ")";
+    result.message = why.str();
+  } else if (search_frames_ >= config_.max_search_frames || found.outcome == Relocaliser::Outcome::kAmbiguous) {
+    result.message = found.message.empty() ? std::string(toString(found.outcome)) : found.message;
   } else {
     return result;  // still confirming or searching
   }

@@ -113,26 +113,20 @@ struct DeskSubmaps {
 
 TEST(LoopDetector, SearchesAFrameInTheBackgroundAndReportsItAtALaterOne) {
   // The graph (no correction yet) puts the camera where it is in submap 0.
-  DeskSubmaps desks;
-  const PipelineConfig& config = desks.config;
-  const PinholeCamera& camera = desks.camera;
-  auto desk = &DeskSubmaps::desk;
-  const SdfPipeline& mapping = desks.mapping;
-  const std::vector<Submap>& closed = desks.closed;
-  const SubmapPlace& active = desks.active;
-  const std::vector<int>& keyframe_submaps = desks.keyframe_submaps;
-  ASSERT_FALSE(keyframe_submaps.empty());
+  const DeskSubmaps desks;
+  ASSERT_FALSE(desks.keyframe_submaps.empty());
 
   LoopClosureConfig loops;
   loops.check_interval_frames = 1;
-  LoopDetector detector(loops, config.relocaliser, config.tracker, config.places);
+  LoopDetector detector(loops, desks.config.relocaliser, desks.config.tracker, desks.config.places);
   std::vector<Eigen::Isometry3d> handed;  // every frame's pose, in order
   std::optional<LoopDetector::Step> found;
   int searched = 0;
   for (int frame = 0; frame < 90 && !found; ++frame) {
-    const Eigen::Isometry3d T_W_C = desk(1.5 + frame / 30.0);
-    const LoopDetector::Step step =
-        detector.step(test::renderRoom(T_W_C, camera), camera, T_W_C, active, closed, mapping.places(), keyframe_submaps);
+    const Eigen::Isometry3d T_W_C = DeskSubmaps::desk(1.5 + frame / 30.0);
+    const LoopDetector::Step step = detector.step(test::renderRoom(T_W_C, desks.camera), desks.camera, T_W_C,
+                                                  desks.active, desks.closed, desks.mapping.places(),
+                                                  desks.keyframe_submaps);
     handed.push_back(T_W_C);
     if (!step.searched) continue;
     ++searched;
