@@ -474,8 +474,18 @@ std::vector<std::string> Settings::validate() const {
                          " cannot be used together yet: swapping keeps to one map (set one of them to 0)");
   }
   if (p.loops.enabled && !p.submaps.enabled()) {
-    v.require(false, "LoopClosure=true needs SubmapSize > 0: loops move submaps (got SubmapSize=" +
-                         text(p.submaps.max_distance_m) + ")");
+    // Named by what keeps to one map: a dense grid or swapping hold no submaps at all.
+    if (p.volume.type == MapType::kDense) {
+      v.require(false, "LoopClosure=true applies to MapType=sparse only: loops move submaps, which a dense grid "
+                       "cannot hold (set LoopClosure=false, or MapType=sparse)");
+    } else if (p.max_map_memory_mb > 0.0) {
+      v.require(false, "LoopClosure=true and MaxMemoryMB=" + text(p.max_map_memory_mb) +
+                           " cannot be used together yet: loops move submaps, and swapping keeps to one map (set "
+                           "one of them off)");
+    } else {
+      v.require(false, "LoopClosure=true needs SubmapSize > 0: loops move submaps (got SubmapSize=" +
+                           text(p.submaps.max_distance_m) + ")");
+    }
   }
   if (p.volume.compact_voxels && p.integrator.max_weight > VoxelCodec<CompactVoxel>::kMaxWeight) {
     v.require(false, "MaxWeight must be at most " + text(VoxelCodec<CompactVoxel>::kMaxWeight) +
@@ -494,7 +504,13 @@ std::vector<std::string> Settings::validate() const {
 
 std::optional<std::string> Settings::keepToOneMapWhereNeeded(const std::vector<std::string>& given,
                                                              bool loads_dense_map) {
-  if (!pipeline.submaps.enabled() || isGiven(given, "SubmapSize")) return std::nullopt;
+  if (!pipeline.submaps.enabled()) {
+    // One map typed (SubmapSize=0): loop closure, which moves submaps, goes too unless typed.
+    if (!pipeline.loops.enabled || isGiven(given, "LoopClosure")) return std::nullopt;
+    pipeline.loops.enabled = false;
+    return "no loop closure (LoopClosure=false): SubmapSize=0 keeps one map, and loops move submaps";
+  }
+  if (isGiven(given, "SubmapSize")) return std::nullopt;
   std::string why;
   if (!pipeline.loops.enabled && isGiven(given, "LoopClosure")) why = "LoopClosure=false, and submaps serve loop closure";
   else if (pipeline.volume.type == MapType::kDense) why = "MapType=dense holds no submaps";

@@ -510,11 +510,36 @@ TEST(Submaps, TheDefaultPresetClosesLoopsWhereTheMapCanHoldSubmapsAndSaysWhereIt
   ASSERT_EQ(typed_size.validate().size(), 1u);
   EXPECT_NE(typed_size.validate()[0].find("SubmapSize=1 applies to MapType=sparse only"), std::string::npos);
 
+  // LoopClosure typed with a map that holds no submaps: refused by the two the user typed, not by
+  // the SubmapSize the note set.
   Settings typed_loops = defaults;
   setParameterFromText(&typed_loops, "MapType", "dense");
   ASSERT_TRUE(typed_loops.keepToOneMapWhereNeeded({"MapType", "LoopClosure"}, false).has_value());
   ASSERT_EQ(typed_loops.validate().size(), 1u);
-  EXPECT_NE(typed_loops.validate()[0].find("LoopClosure=true needs SubmapSize > 0"), std::string::npos);
+  EXPECT_NE(typed_loops.validate()[0].find("LoopClosure=true applies to MapType=sparse only"), std::string::npos)
+      << typed_loops.validate()[0];
+  Settings typed_loops_swapping = defaults;
+  setParameterFromText(&typed_loops_swapping, "MaxMemoryMB", "64");
+  ASSERT_TRUE(typed_loops_swapping.keepToOneMapWhereNeeded({"MaxMemoryMB", "LoopClosure"}, false).has_value());
+  ASSERT_EQ(typed_loops_swapping.validate().size(), 1u);
+  EXPECT_NE(typed_loops_swapping.validate()[0].find("LoopClosure=true and MaxMemoryMB=64"), std::string::npos)
+      << typed_loops_swapping.validate()[0];
+
+  // One map typed: loop closure goes with the submaps, said once, unless it was typed too.
+  Settings one_map = defaults;
+  setParameterFromText(&one_map, "SubmapSize", "0");
+  const auto one_map_note = one_map.keepToOneMapWhereNeeded({"SubmapSize"}, false);
+  ASSERT_TRUE(one_map_note.has_value()) << "SubmapSize=0 alone asks for one map";
+  EXPECT_NE(one_map_note->find("LoopClosure=false"), std::string::npos) << *one_map_note;
+  EXPECT_FALSE(one_map.pipeline.loops.enabled);
+  EXPECT_TRUE(one_map.validate().empty()) << one_map.validate()[0];
+  Settings one_map_with_loops = defaults;
+  setParameterFromText(&one_map_with_loops, "SubmapSize", "0");
+  EXPECT_FALSE(one_map_with_loops.keepToOneMapWhereNeeded({"SubmapSize", "LoopClosure"}, false).has_value());
+  ASSERT_EQ(one_map_with_loops.validate().size(), 1u);
+  EXPECT_NE(one_map_with_loops.validate()[0].find("LoopClosure=true needs SubmapSize > 0"), std::string::npos);
+  Settings paper = preset("paper");
+  EXPECT_FALSE(paper.keepToOneMapWhereNeeded({}, false).has_value()) << "the paper's one map needs no note";
 }
 
 }  // namespace

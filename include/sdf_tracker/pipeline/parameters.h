@@ -40,7 +40,8 @@ struct Settings {
   /// typed LoopClosure=false (submaps serve loop closure), or the map cannot hold submaps
   /// (MapType=dense, MaxMemoryMB > 0, or `loads_dense_map`: the map to be loaded is a dense
   /// grid), it sets one map, and loop closure off unless typed, and says so in a sentence to show
-  /// the user once. A SubmapSize the user typed is left for validate()
+  /// the user once; where one map was asked for (SubmapSize=0) and LoopClosure not typed, loop
+  /// closure off, said alike. A SubmapSize or LoopClosure the user typed is left for validate()
   /// to refuse with the other parameter's name.
   std::optional<std::string> keepToOneMapWhereNeeded(const std::vector<std::string>& given, bool loads_dense_map);
 };
