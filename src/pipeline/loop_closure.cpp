@@ -207,8 +207,9 @@ LoopDetector::Step LoopDetector::conclude(Outcome outcome) {
     result.match = LoopMatch{search_submap_, found.T_W_C, found.track.covariance};
   } else if (accepted) {
     std::ostringstream why;
-    why << "found " << drift_m << " m and " << drift_deg << " deg from where the graph puts the camera, beyond max_drift_m ("
-        << config_.max_drift_m << " m) or search_angle_deg (" << config_.search_angle_deg << ")";
+    // In the parameter's name (frames.csv is read by users); the turn's bound is no parameter.
+    why << "found " << drift_m << " m and " << drift_deg << " deg from where the graph puts the camera, beyond LoopMaxDrift ("
+        << config_.max_drift_m << " m) or a turn of " << config_.search_angle_deg << " deg";
     result.message = why.str();
   } else if (search_frames_ >= config_.max_search_frames || found.outcome == Relocaliser::Outcome::kAmbiguous) {
     result.message = found.message.empty() ? std::string(toString(found.outcome)) : found.message;

@@ -50,8 +50,9 @@ Tracks a depth camera through a TUM-layout sequence and reconstructs the scene.
   --sequence DIR        folder with depth.txt, depth/*.png [, intrinsics.txt, groundtruth.txt,
                         rgb.txt: colour images registered to the depth, for a coloured map;
                         --param Colour=false ignores them]
-  --output DIR          where trajectory.txt, mesh.ply, cloud.ply, frames.csv (and, with ground
-                        truth, accuracy.txt and trajectory.png) are written; created if missing
+  --output DIR          where trajectory.txt, mesh.ply, cloud.ply, frames.csv, summary.txt and
+                        summary.json (and, with ground truth, trajectory.png; with loop closure,
+                        trajectory_online.txt and loops.csv) are written; created if missing
   --preset NAME         default | paper (Table II) | reference (its launch file); default: default
   --param NAME=VALUE    override one parameter (repeatable), e.g. --param CellSize=0.02;
                         --list-params shows them all
@@ -83,7 +84,8 @@ Tracks a depth camera through a TUM-layout sequence and reconstructs the scene.
                         (synthetic sequences): a recording's adds its own calibration and timing
   --raycast             also ray-cast the virtual depth view every frame (as the node's
                         image_denoised) and time it
-  --quiet               no progress bar
+  --quiet               no progress bar, and no line as each relocalisation or loop happens
+                        (frames.csv's message and the summary still say them)
   --list-params         print every parameter with its value in the chosen preset and exit
 )";
 
@@ -349,17 +351,22 @@ int run(int argc, char** argv) {
       path.add(sequence.timestamp(i), report.submap, T_W_C, pipeline.submapPlace(report.submap).T_map_W * T_W_C);
     }
     if (report.loop.searched) loop_search_ms.push_back(report.loop.search_ms);
-    if (report.loop.found && !args.has("quiet")) {
-      std::cout << "\nframe " << i << ": loop found: the view of submap " << report.loop.frame_submap
-                << " is in submap " << report.loop.submap << "\n";
+    // Said as it happens (unless --quiet) and in frames.csv's message.
+    std::vector<std::string> loop_events;
+    if (report.loop.found) {
+      loop_events.push_back("loop found: the view of submap " + std::to_string(report.loop.frame_submap) +
+                            " is in submap " + std::to_string(report.loop.submap));
     }
     if (report.loop.solved) {
       optimise_ms.push_back(report.loop.optimise_ms);
-      if (!args.has("quiet")) {
-        std::cout << "\nframe " << i << ": pose graph solved, " << report.loop.closed << " loop(s) closed, "
-                  << report.loop.rejected << " rejected; the active submap moved " << std::setprecision(3)
-                  << report.loop.correction_m * 100.0 << " cm, " << report.loop.correction_deg << " deg\n";
-      }
+      std::ostringstream solved;
+      solved << "pose graph solved, " << report.loop.closed << " loop(s) closed, " << report.loop.rejected
+             << " rejected; the active submap moved " << std::setprecision(3) << report.loop.correction_m * 100.0
+             << " cm, " << report.loop.correction_deg << " deg";
+      loop_events.push_back(solved.str());
+    }
+    if (!args.has("quiet")) {
+      for (const std::string& event : loop_events) std::cout << "\nframe " << i << ": " << event << "\n";
     }
     if (!true_T_W_C.empty() && !report.initialised_map && t.tracked()) {
       const Eigen::Vector3d error_m = t.T_W_C.translation() - true_T_W_C[i]->translation();
@@ -385,6 +392,7 @@ int run(int argc, char** argv) {
       message += (message.empty() ? "" : "; ") + std::string("loop search in submap ") +
                  std::to_string(report.loop.submap) + ": " + report.loop.message;
     }
+    for (const std::string& event : loop_events) message += (message.empty() ? "" : "; ") + event;
     if (!report.swap_error.empty()) {
       // Said once as it happens (every frame after it may fail alike); each frame's is in frames.csv.
       if (swap_errors++ == 0) {
@@ -495,12 +503,19 @@ int run(int argc, char** argv) {
   }
   if (pipeline.config().loops.enabled) {
     summary << "\nloops: " << pipeline.loopsClosed() << " closed, " << pipeline.loopsRejected()
-            << " rejected by the pose graph; "
-            << loop_search_ms.size() << " frames searched for one (off the tracking thread; ms per frame: median "
-            << st::tools::percentile(loop_search_ms, 0.5) << ", max " << st::tools::percentile(loop_search_ms, 1.0)
-            << "); graph solved (off the tracking thread) in " << st::tools::percentile(optimise_ms, 0.5) << " ms (median), "
-            << st::tools::percentile(optimise_ms, 1.0) << " ms (max); trajectory.txt is the optimised path, "
-            << "trajectory_online.txt the one published at the time";
+            << " rejected by the pose graph; " << loop_search_ms.size() << " frames searched for one";
+    if (!loop_search_ms.empty()) {
+      summary << " (off the tracking thread; ms per frame: median " << st::tools::percentile(loop_search_ms, 0.5)
+              << ", max " << st::tools::percentile(loop_search_ms, 1.0) << ")";
+    }
+    if (optimise_ms.empty()) {
+      summary << "; the graph was never solved (no loop): trajectory.txt is the path as published";
+    } else {
+      summary << "; graph solved " << optimise_ms.size() << (optimise_ms.size() == 1 ? " time" : " times")
+              << " (off the tracking thread) in " << st::tools::percentile(optimise_ms, 0.5) << " ms (median), "
+              << st::tools::percentile(optimise_ms, 1.0) << " ms (max); trajectory.txt is the optimised path, "
+              << "trajectory_online.txt the one published at the time";
+    }
   }
   summary << "\nmemory: " << st::toString(v.type) << " map " << pipeline.mapMemoryBytes() / 1048576.0 << " MiB";
   if (const st::MapMemoryBudget* budget = pipeline.memoryBudget()) {
