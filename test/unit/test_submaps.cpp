@@ -512,18 +512,17 @@ TEST(Submaps, TheDefaultPresetClosesLoopsWhereTheMapCanHoldSubmapsAndSaysWhereIt
 
   // LoopClosure typed with a map that holds no submaps: refused by the two the user typed, not by
   // the SubmapSize the note set.
-  Settings typed_loops = defaults;
-  setParameterFromText(&typed_loops, "MapType", "dense");
-  ASSERT_TRUE(typed_loops.keepToOneMapWhereNeeded({"MapType", "LoopClosure"}, false).has_value());
-  ASSERT_EQ(typed_loops.validate().size(), 1u);
-  EXPECT_NE(typed_loops.validate()[0].find("LoopClosure=true applies to MapType=sparse only"), std::string::npos)
-      << typed_loops.validate()[0];
-  Settings typed_loops_swapping = defaults;
-  setParameterFromText(&typed_loops_swapping, "MaxMemoryMB", "64");
-  ASSERT_TRUE(typed_loops_swapping.keepToOneMapWhereNeeded({"MaxMemoryMB", "LoopClosure"}, false).has_value());
-  ASSERT_EQ(typed_loops_swapping.validate().size(), 1u);
-  EXPECT_NE(typed_loops_swapping.validate()[0].find("LoopClosure=true and MaxMemoryMB=64"), std::string::npos)
-      << typed_loops_swapping.validate()[0];
+  const auto refusalWithLoopsTyped = [&](const char* name, const char* value) {
+    Settings typed = defaults;
+    setParameterFromText(&typed, name, value);
+    EXPECT_TRUE(typed.keepToOneMapWhereNeeded({name, "LoopClosure"}, false).has_value()) << name << ": one map, said";
+    const std::vector<std::string> errors = typed.validate();
+    return errors.size() == 1 ? errors[0] : std::to_string(errors.size()) + " errors, not one";
+  };
+  const std::string dense_refusal = refusalWithLoopsTyped("MapType", "dense");
+  EXPECT_NE(dense_refusal.find("LoopClosure=true applies to MapType=sparse only"), std::string::npos) << dense_refusal;
+  const std::string swap_refusal = refusalWithLoopsTyped("MaxMemoryMB", "64");
+  EXPECT_NE(swap_refusal.find("LoopClosure=true and MaxMemoryMB=64"), std::string::npos) << swap_refusal;
 
   // One map typed: loop closure goes with the submaps, said once, unless it was typed too.
   Settings one_map = defaults;
