@@ -388,18 +388,18 @@ int run(int argc, char** argv) {
     if (!report.swap_notice.empty()) std::cout << "\n" << report.swap_notice << "\n";
     if (!report.swap_warning.empty()) std::cerr << "\nframe " << i << ": warning: " << report.swap_warning << "\n";
     std::string message = t.message;
+    const auto say = [&message](const std::string& text) { message += (message.empty() ? "" : "; ") + text; };
     if (report.loop.searched && !report.loop.message.empty()) {
-      message += (message.empty() ? "" : "; ") + std::string("loop search in submap ") +
-                 std::to_string(report.loop.submap) + ": " + report.loop.message;
+      say("loop search in submap " + std::to_string(report.loop.submap) + ": " + report.loop.message);
     }
-    for (const std::string& event : loop_events) message += (message.empty() ? "" : "; ") + event;
+    for (const std::string& event : loop_events) say(event);
     if (!report.swap_error.empty()) {
       // Said once as it happens (every frame after it may fail alike); each frame's is in frames.csv.
       if (swap_errors++ == 0) {
         first_swap_error = report.swap_error;
         std::cerr << "\nframe " << i << ": " << report.swap_error << " (later swap errors: frames.csv)\n";
       }
-      message += (message.empty() ? "" : "; ") + report.swap_error;
+      say(report.swap_error);
     }
     std::replace(message.begin(), message.end(), ',', ';');
     frames_csv << std::fixed << std::setprecision(6) << sequence.timestamp(i) << ',' << st::toString(t.status) << ','
