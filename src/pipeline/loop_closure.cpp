@@ -25,6 +25,12 @@ PoseInformation diagonalInformation(double sigma_m, double sigma_rad) {
   return information;
 }
 
+/// The drift model's standard deviations over `distance_m` of tracked path [m, rad], without the
+/// floors (what a stretch inside one submap adds to a loop, whose own sigma is its floor).
+Eigen::Vector2d driftSigma(const LoopClosureConfig& config, double distance_m) {
+  return {config.odometry_drift * distance_m, config.odometry_drift_deg_per_m * distance_m * kRadPerDeg};
+}
+
 }  // namespace
 
 std::vector<std::string> LoopClosureConfig::validate() const {
@@ -47,14 +53,20 @@ std::vector<std::string> LoopClosureConfig::validate() const {
 }
 
 PoseInformation odometryEdgeInformation(const LoopClosureConfig& config, const Eigen::Isometry3d& motion) {
-  const double distance_m = motion.translation().norm();
-  return diagonalInformation(config.odometry_floor_m + config.odometry_drift * distance_m,
-                             (config.odometry_floor_deg + config.odometry_drift_deg_per_m * distance_m) * kRadPerDeg);
+  const Eigen::Vector2d drift = driftSigma(config, motion.translation().norm());
+  return diagonalInformation(config.odometry_floor_m + drift(0), config.odometry_floor_deg * kRadPerDeg + drift(1));
 }
 
-PoseInformation loopEdgeInformation(const LoopClosureConfig& config, const Eigen::Isometry3d& T_S_C,
+PoseInformation loopEdgeInformation(const LoopClosureConfig& config, const Eigen::Isometry3d& T_S_from,
+                                    const Eigen::Isometry3d& T_S_C,
                                     const Eigen::Matrix<double, 6, 6>& fit_covariance_S,
                                     const Eigen::Isometry3d& T_S_to) {
+  // The old map where the camera was found lies as the tracker's drift from S's anchor placed it:
+  // as uncertain as the camera's fit, about its centre.
+  const Eigen::Vector2d old_drift = driftSigma(config, (T_S_C.translation() - T_S_from.translation()).norm());
+  Eigen::Matrix<double, 6, 6> camera_covariance = fit_covariance_S;
+  camera_covariance.diagonal() += (Eigen::Matrix<double, 6, 1>() << Eigen::Vector3d::Constant(old_drift(1) * old_drift(1)),
+                                   Eigen::Vector3d::Constant(old_drift(0) * old_drift(0))).finished();
   // A small motion xi = [w; v] of the camera about its centre c (along S's axes) moves the `to`
   // node, at (R, t) in S, by R^T w (rotation) and R^T (v + w x (t - c)) (translation), in its own
   // frame: the edge's error, translation first.
@@ -64,10 +76,14 @@ PoseInformation loopEdgeInformation(const LoopClosureConfig& config, const Eigen
   J.block<3, 3>(0, 0) = -Rt * skew(lever);
   J.block<3, 3>(0, 3) = Rt;
   J.block<3, 3>(3, 0) = Rt;
-  Eigen::Matrix<double, 6, 6> covariance = J * fit_covariance_S * J.transpose();
+  Eigen::Matrix<double, 6, 6> covariance = J * camera_covariance * J.transpose();
+  // The tracked stretch from the camera to its submap's anchor, as an odometry edge holds it.
+  const Eigen::Vector2d own_drift = driftSigma(config, lever.norm());
   const double sigma_rad = config.loop_sigma_deg * kRadPerDeg;
-  covariance.diagonal() += (Eigen::Matrix<double, 6, 1>() << Eigen::Vector3d::Constant(config.loop_sigma_m * config.loop_sigma_m),
-                            Eigen::Vector3d::Constant(sigma_rad * sigma_rad)).finished();
+  const double sigma2_m = config.loop_sigma_m * config.loop_sigma_m + own_drift(0) * own_drift(0);
+  const double sigma2_rad = sigma_rad * sigma_rad + own_drift(1) * own_drift(1);
+  covariance.diagonal() += (Eigen::Matrix<double, 6, 1>() << Eigen::Vector3d::Constant(sigma2_m),
+                            Eigen::Vector3d::Constant(sigma2_rad)).finished();
   // Inverted through its eigen decomposition: along an unconstrained direction the variance is
   // kUnconstrainedVariance and the information next to zero, without a near-singular solve.
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(0.5 * (covariance + covariance.transpose()));

@@ -498,7 +498,8 @@ void SdfPipeline::startSubmap(bool after_search) {
     graph_.addNode(active_.T_map_anchor());
     // (The search's covariance is not kept: the loop's own sigma alone.)
     graph_.addEdge(PoseEdge{nearest->place.node, active_.node, nearest->place.T_map_anchor().inverse() * T_W_C_,
-                            loopEdgeInformation(config_.loops, T_W_C_, Eigen::Matrix<double, 6, 6>::Zero(), T_W_C_),
+                            loopEdgeInformation(config_.loops, nearest->place.T_map_anchor(), T_W_C_,
+                                                Eigen::Matrix<double, 6, 6>::Zero(), T_W_C_),
                             PoseEdgeKind::kLoop});
   } else {
     // The tracker goes on in the same frame: the odometry between the two anchors.
@@ -627,7 +628,8 @@ void SdfPipeline::addLoop(const LoopDetector::Step& step, LoopReport* report) {
   const Eigen::Isometry3d T_old_anchor = old.T_W_anchor.inverse() * T_S_anchor;
   loop_edges_.push_back(graph_.edges().size());
   graph_.addEdge(PoseEdge{old.node, tracked_in.node, T_old_anchor,
-                          loopEdgeInformation(config_.loops, step.match->T_S_C, step.match->covariance_S, T_S_anchor),
+                          loopEdgeInformation(config_.loops, old.T_W_anchor, step.match->T_S_C,
+                                              step.match->covariance_S, T_S_anchor),
                           PoseEdgeKind::kLoop});
   if (tracked_in.node == active_.node) loop_detector_->joined(old.node);
   graph_solver_->solve(graph_);

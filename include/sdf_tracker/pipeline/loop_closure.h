@@ -61,12 +61,17 @@ struct LoopClosureConfig {
 /// The information of the odometry edge between two consecutive submaps whose anchors are `motion`
 /// apart (LoopClosureConfig's drift model).
 PoseInformation odometryEdgeInformation(const LoopClosureConfig& config, const Eigen::Isometry3d& motion);
-/// The information of a loop edge measured by a fit of the camera in the old submap S: the fit's
-/// pose T_S_C and its covariance (TrackResult::covariance, about the camera centre along S's
-/// axes), carried to the edge's error in the frame of its `to` node, which lies at T_S_to; plus
-/// loop_sigma in every direction (what the fit does not see: each submap's own error). Along a
-/// direction the view left unconstrained (a corridor's length) the loop holds next to nothing.
-PoseInformation loopEdgeInformation(const LoopClosureConfig& config, const Eigen::Isometry3d& T_S_C,
+/// The information of a loop edge measured by a fit of the camera in the old submap S, from the
+/// old submap's anchor (its `from` node, at T_S_from) to the anchor of the submap the frame was
+/// tracked in (its `to` node, at T_S_to): the fit's pose T_S_C and its covariance
+/// (TrackResult::covariance, about the camera centre along S's axes), carried to the edge's error
+/// in the frame of its `to` node; plus loop_sigma in every direction (what the fit does not see);
+/// plus the drift model's odometry over the two stretches the edge spans besides the fit (from
+/// S's anchor to where the camera is found: the old map there was fused at poses tracked that far;
+/// from the camera to its own submap's anchor). Along a direction the view left unconstrained (a
+/// corridor's length) the loop holds next to nothing.
+PoseInformation loopEdgeInformation(const LoopClosureConfig& config, const Eigen::Isometry3d& T_S_from,
+                                    const Eigen::Isometry3d& T_S_C,
                                     const Eigen::Matrix<double, 6, 6>& fit_covariance_S,
                                     const Eigen::Isometry3d& T_S_to);
 
