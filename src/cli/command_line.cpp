@@ -91,7 +91,7 @@ int runTool(const char* tool, int (*run)(int, char**), int argc, char** argv) {
   try {
     return run(argc, argv);
   } catch (const std::exception& e) {
-    std::cerr << "\n" << tool << ": error: " << e.what() << "\n";
+    std::cerr << tool << ": error: " << e.what() << "\n";
     return 1;
   }
 }

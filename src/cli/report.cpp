@@ -168,11 +168,15 @@ void ProgressBar::update(size_t done) {
   std::fprintf(stderr, "\r[%s%s] %zu/%zu frames  %.1f frames/s ", std::string(filled, '#').c_str(),
                std::string(width - filled, '.').c_str(), done, total_, elapsed > 0 ? done / elapsed : 0.0);
   std::fflush(stderr);
+  line_open_ = true;
 }
 
 void ProgressBar::finish() {
-  if (enabled_) std::fprintf(stderr, "\n");
+  if (line_open_) std::fprintf(stderr, "\n");
+  line_open_ = false;
 }
+
+ProgressBar::~ProgressBar() { finish(); }
 
 double percentile(std::vector<double> values, double q) {
   if (values.empty()) return 0.0;

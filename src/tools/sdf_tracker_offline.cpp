@@ -294,7 +294,8 @@ int run(int argc, char** argv) {
     } catch (const std::runtime_error& e) {
       // As the node does with a bad image: this frame is bad input, the run goes on.
       std::string message = e.what();
-      std::cerr << "\nframe " << i << ": " << message << ": skipped\n";
+      progress.finish();
+      std::cerr << "frame " << i << ": " << message << ": skipped\n";
       if (unreadable++ == 0) first_unreadable = message;
       ++failed;
       std::replace(message.begin(), message.end(), ',', ';');
@@ -311,7 +312,10 @@ int run(int argc, char** argv) {
         colour = sequence.colour(i);
       } catch (const std::runtime_error& e) {
         // The depth is tracked and fused all the same, without colour; said once, counted.
-        if (colour_errors++ == 0) std::cerr << "\nframe " << i << ": " << e.what() << ": fused without colour\n";
+        if (colour_errors++ == 0) {
+          progress.finish();
+          std::cerr << "frame " << i << ": " << e.what() << ": fused without colour\n";
+        }
       }
     }
     const st::ColourImage* colour_in = colour ? &*colour : nullptr;
@@ -366,7 +370,8 @@ int run(int argc, char** argv) {
       loop_events.push_back(solved.str());
     }
     if (!args.has("quiet")) {
-      for (const std::string& event : loop_events) std::cout << "\nframe " << i << ": " << event << "\n";
+      if (!loop_events.empty()) progress.finish();
+      for (const std::string& event : loop_events) std::cout << "frame " << i << ": " << event << std::endl;
     }
     if (!true_T_W_C.empty() && !report.initialised_map && t.tracked()) {
       const Eigen::Vector3d error_m = t.T_W_C.translation() - true_T_W_C[i]->translation();
@@ -385,8 +390,14 @@ int run(int argc, char** argv) {
       if (report.fused) fusion_ms.push_back(report.fusion_ms);
       frame_ms.push_back(report.tracking_ms + report.fusion_ms + cast_ms);
     }
-    if (!report.swap_notice.empty()) std::cout << "\n" << report.swap_notice << "\n";
-    if (!report.swap_warning.empty()) std::cerr << "\nframe " << i << ": warning: " << report.swap_warning << "\n";
+    if (!report.swap_notice.empty()) {
+      progress.finish();
+      std::cout << report.swap_notice << std::endl;
+    }
+    if (!report.swap_warning.empty()) {
+      progress.finish();
+      std::cerr << "frame " << i << ": warning: " << report.swap_warning << "\n";
+    }
     std::string message = t.message;
     const auto say = [&message](const std::string& text) { message += (message.empty() ? "" : "; ") + text; };
     if (report.loop.searched && !report.loop.message.empty()) {
@@ -397,7 +408,8 @@ int run(int argc, char** argv) {
       // Said once as it happens (every frame after it may fail alike); each frame's is in frames.csv.
       if (swap_errors++ == 0) {
         first_swap_error = report.swap_error;
-        std::cerr << "\nframe " << i << ": " << report.swap_error << " (later swap errors: frames.csv)\n";
+        progress.finish();
+        std::cerr << "frame " << i << ": " << report.swap_error << " (later swap errors: frames.csv)\n";
       }
       say(report.swap_error);
     }

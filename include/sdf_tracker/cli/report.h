@@ -32,16 +32,22 @@ double percentile(std::vector<double> values, double q);
 std::string jsonString(const std::string& text);
 std::string jsonNumber(double value);
 
-/// A one-line progress bar with the processing rate, redrawn on stderr.
+/// A one-line progress bar with the processing rate, redrawn on stderr. finish() ends its line
+/// (before a message of its own line; the next update() draws the bar again), and so does going out
+/// of scope with the line open (a run that stopped on an error: its message starts a line).
 class ProgressBar {
  public:
   explicit ProgressBar(size_t total, bool enabled = true);
+  ~ProgressBar();
+  ProgressBar(const ProgressBar&) = delete;
+  ProgressBar& operator=(const ProgressBar&) = delete;
   void update(size_t done);
   void finish();
 
  private:
   size_t total_;
   bool enabled_;
+  bool line_open_ = false;  ///< drawn and not yet ended
   std::chrono::steady_clock::time_point start_;
 };
 
