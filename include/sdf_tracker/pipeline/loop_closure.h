@@ -43,13 +43,14 @@ struct LoopClosureConfig {
   /// retry_after_frames.
   int max_search_frames = 6;
   int retry_after_frames = 30;
-  /// The standard deviation of a loop's relative pose (the relocaliser's fit against the old
-  /// submap) [m, degrees].
+  /// The standard deviation of a loop's relative pose besides its fit's covariance and the drift
+  /// over the stretches it spans (loopEdgeInformation): what neither states [m, degrees].
   double loop_sigma_m = 0.02;
   double loop_sigma_deg = 1.0;
   /// The standard deviation of the odometry between consecutive submaps (the tracker's drift over
   /// the stretch): this fraction of the distance between their anchors [m/m], this many degrees per
-  /// metre, and no less than the floors.
+  /// metre, and no less than the floors. A loop adds the same drift, without the floors, over the
+  /// stretches between its frame and the two anchors it joins.
   double odometry_drift = 0.02;
   double odometry_drift_deg_per_m = 0.5;
   double odometry_floor_m = 0.005;
