@@ -496,7 +496,7 @@ void SdfPipeline::startSubmap(bool after_search) {
     });
     active_.path_m = closed.path_m + std::max(config_.loops.min_path_m, config_.submaps.track_recent_m);
     graph_.addNode(active_.T_map_anchor());
-    // (The search's covariance is not kept: the loop's own sigma alone.)
+    // (The search's covariance is not kept: the loop's own sigma and the drift from that anchor.)
     graph_.addEdge(PoseEdge{nearest->place.node, active_.node, nearest->place.T_map_anchor().inverse() * T_W_C_,
                             loopEdgeInformation(config_.loops, nearest->place.T_map_anchor(), T_W_C_,
                                                 Eigen::Matrix<double, 6, 6>::Zero(), T_W_C_),
