@@ -3,6 +3,9 @@
 #include <ceres/ceres.h>
 #include <ceres/manifold.h>
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -78,6 +81,16 @@ void PoseGraph::setPose(int node, const Eigen::Isometry3d& T_map_node) {
                             std::to_string(poses_.size()) + ")");
   }
   poses_[node] = T_map_node;
+}
+
+PoseSigma leastCertainSigma(const PoseInformation& information) {
+  const Eigen::Matrix<double, 6, 6> covariance = information.ldlt().solve(Eigen::Matrix<double, 6, 6>::Identity());
+  const auto largest = [](const Eigen::Matrix3d& block) {
+    return std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(0.5 * (block + block.transpose()))
+                                       .eigenvalues()
+                                       .maxCoeff()));
+  };
+  return {largest(covariance.topLeftCorner<3, 3>()), largest(covariance.bottomRightCorner<3, 3>()) * 180.0 / M_PI};
 }
 
 std::string informationProblem(const PoseInformation& information) {

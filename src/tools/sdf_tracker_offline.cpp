@@ -23,6 +23,7 @@
 #include "sdf_tracker/cli/output_folder.h"
 #include "sdf_tracker/cli/report.h"
 #include "sdf_tracker/cli/tracker_alone.h"
+#include "sdf_tracker/graph/pose_graph.h"
 #include "sdf_tracker/io/files.h"
 #include "sdf_tracker/io/map_file.h"
 #include "sdf_tracker/io/mesh_file.h"
@@ -435,7 +436,8 @@ int run(int argc, char** argv) {
     // Each loop as the submaps' anchors it joins (the frames that started them), to hold against
     // a ground truth.
     std::ostringstream loops_csv;
-    loops_csv << "from_submap,to_submap,from_anchor_time,to_anchor_time,tx,ty,tz,qx,qy,qz,qw,kept\n" << std::fixed;
+    loops_csv << "from_submap,to_submap,from_anchor_time,to_anchor_time,tx,ty,tz,qx,qy,qz,qw,kept,sigma_m,sigma_deg\n"
+              << std::fixed;
     for (const st::SdfPipeline::Loop& loop : pipeline.loops()) {
       const st::PoseEdge& e = loop.edge;
       const Eigen::Quaterniond q(e.T_from_to.rotation());
@@ -449,7 +451,10 @@ int run(int argc, char** argv) {
       };
       loops_csv << e.from << ',' << e.to << ',' << stamp(e.from) << ',' << stamp(e.to) << ',' << std::setprecision(7)
                 << t.x() << ',' << t.y() << ',' << t.z() << ',' << q.x() << ',' << q.y() << ',' << q.z() << ','
-                << q.w() << ',' << (loop.kept ? 1 : 0) << '\n';
+                << q.w() << ',' << (loop.kept ? 1 : 0) << ',';
+      // How firmly it holds: its least certain direction (a corridor's length: about a kilometre).
+      const st::PoseSigma sigma = st::leastCertainSigma(e.information);
+      loops_csv << std::setprecision(4) << sigma.m << ',' << sigma.deg << '\n';
     }
     st::io::writeTextFile(output.path("loops.csv"), loops_csv.str());
   }

@@ -56,6 +56,23 @@ PoseGraph driftingSquare(const std::vector<Eigen::Isometry3d>& truth) {
   return graph;
 }
 
+TEST(PoseGraph, AnEdgesLeastCertainDirectionIsWhatItsSigmaSays) {
+  // Translation sigmas 1, 2 and 5 cm and rotation 0.5, 1 and 3 degrees, along axes turned away
+  // from the edge's: the largest of each, whatever the axes.
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1.0, 2.0, -0.5).normalized()).toRotationMatrix();
+  const double rad = M_PI / 180.0;
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+  covariance.topLeftCorner<3, 3>() = R * Eigen::Vector3d(1e-4, 4e-4, 25e-4).asDiagonal() * R.transpose();
+  covariance.bottomRightCorner<3, 3>() =
+      R.transpose() * Eigen::Vector3d(std::pow(0.5 * rad, 2), std::pow(rad, 2), std::pow(3.0 * rad, 2)).asDiagonal() * R;
+  const PoseSigma sigma = leastCertainSigma(covariance.inverse());
+  EXPECT_NEAR(sigma.m, 0.05, 1e-9);
+  EXPECT_NEAR(sigma.deg, 3.0, 1e-9);
+  // A direction held by nothing shows as such.
+  covariance(0, 0) = 1e6;
+  EXPECT_GT(leastCertainSigma(covariance.inverse()).m, 900.0);
+}
+
 TEST(PoseGraph, ConsistentEdgesFromADriftedStartGiveTheTruePosesExactly) {
   const std::vector<Eigen::Isometry3d> truth = squareTruth();
   PoseGraph graph;

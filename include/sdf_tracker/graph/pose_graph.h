@@ -16,6 +16,15 @@ using PoseInformation = Eigen::Matrix<double, 6, 6>;
 /// positive definite". The one rule for PoseGraph::addEdge and a saved graph's reader.
 std::string informationProblem(const PoseInformation& information);
 
+/// The standard deviations `information` states along its least certain direction of translation
+/// [m] and of rotation [degrees]: the square roots of the largest eigenvalues of its covariance's
+/// two blocks. Along a direction it holds nothing (kUnconstrainedVariance), about a kilometre.
+struct PoseSigma {
+  double m = 0.0;
+  double deg = 0.0;
+};
+PoseSigma leastCertainSigma(const PoseInformation& information);
+
 /// What an edge of the pose graph was measured by.
 enum class PoseEdgeKind {
   kOdometry,  ///< consecutive nodes, from tracking (or a robot's odometry): trusted as measured
