@@ -178,16 +178,4 @@ void ProgressBar::finish() {
 
 ProgressBar::~ProgressBar() { finish(); }
 
-double percentile(std::vector<double> values, double q) {
-  if (values.empty()) return 0.0;
-  const double rank = std::clamp(q, 0.0, 1.0) * static_cast<double>(values.size() - 1);
-  const size_t below = static_cast<size_t>(std::floor(rank));
-  std::nth_element(values.begin(), values.begin() + below, values.end());
-  const double lower = values[below];
-  if (below + 1 >= values.size()) return lower;
-  // The next rank up is the smallest of those after `below` (nth_element left them unordered).
-  const double upper = *std::min_element(values.begin() + below + 1, values.end());
-  return lower + (rank - static_cast<double>(below)) * (upper - lower);
-}
-
 }  // namespace sdf_tracker::tools

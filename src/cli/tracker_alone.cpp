@@ -40,8 +40,8 @@ double squaredMahalanobisOfPosition(const Eigen::Vector3d& error_m, const Eigen:
 
 SingleFrameErrors::SingleFrameErrors(const std::vector<double>& errors_m, const std::vector<double>& squared_mahalanobis)
     : stats(evaluation::summarize(errors_m)),
-      p90_m(percentile(errors_m, 0.9)),
-      p99_m(percentile(errors_m, 0.99)),
+      p90_m(evaluation::percentile(errors_m, 0.9)),
+      p99_m(evaluation::percentile(errors_m, 0.99)),
       over_1cm(std::count_if(errors_m.begin(), errors_m.end(), [](double e) { return e > 0.01; })),
       within_two_sigma(std::count_if(squared_mahalanobis.begin(), squared_mahalanobis.end(),
                                      [](double d2) { return d2 <= kTwoSigmaSquared3d; })) {}

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <tuple>
+#include <utility>
 
 #include <Eigen/Geometry>
 
@@ -24,13 +25,20 @@ ErrorStats summarize(std::vector<double> errors) {
   }
   stats.mean = sum / errors.size();
   stats.rmse = std::sqrt(sum_sq / errors.size());
-  const size_t mid = errors.size() / 2;
-  std::nth_element(errors.begin(), errors.begin() + mid, errors.end());
-  stats.median = errors[mid];
-  if (errors.size() % 2 == 0) {
-    stats.median = 0.5 * (stats.median + *std::max_element(errors.begin(), errors.begin() + mid));
-  }
+  stats.median = percentile(std::move(errors), 0.5);
   return stats;
+}
+
+double percentile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  const double rank = std::clamp(q, 0.0, 1.0) * static_cast<double>(values.size() - 1);
+  const size_t below = static_cast<size_t>(std::floor(rank));
+  std::nth_element(values.begin(), values.begin() + below, values.end());
+  const double lower = values[below];
+  if (below + 1 >= values.size()) return lower;
+  // The next rank up is the smallest of those after `below` (nth_element left them unordered).
+  const double upper = *std::min_element(values.begin() + below + 1, values.end());
+  return lower + (rank - static_cast<double>(below)) * (upper - lower);
 }
 
 std::vector<std::pair<size_t, size_t>> associate(const std::vector<io::StampedPose>& estimate,

@@ -18,11 +18,14 @@ namespace {
 
 constexpr double kRadPerDeg = M_PI / 180.0;
 
+/// Three of `first`, then three of `second`: a 6-vector of per-axis values.
+Eigen::Matrix<double, 6, 1> threeAndThree(double first, double second) {
+  return (Eigen::Matrix<double, 6, 1>() << Eigen::Vector3d::Constant(first), Eigen::Vector3d::Constant(second))
+      .finished();
+}
+
 PoseInformation diagonalInformation(double sigma_m, double sigma_rad) {
-  PoseInformation information = PoseInformation::Zero();
-  information.diagonal() << Eigen::Vector3d::Constant(1.0 / (sigma_m * sigma_m)),
-      Eigen::Vector3d::Constant(1.0 / (sigma_rad * sigma_rad));
-  return information;
+  return threeAndThree(1.0 / (sigma_m * sigma_m), 1.0 / (sigma_rad * sigma_rad)).asDiagonal();
 }
 
 /// The drift model's standard deviations over `distance_m` of tracked path [m, rad], without the
@@ -58,15 +61,13 @@ PoseInformation odometryEdgeInformation(const LoopClosureConfig& config, const E
 }
 
 PoseInformation loopEdgeInformation(const LoopClosureConfig& config, const Eigen::Isometry3d& T_S_from,
-                                    const Eigen::Isometry3d& T_S_C,
-                                    const Eigen::Matrix<double, 6, 6>& fit_covariance_S,
+                                    const Eigen::Isometry3d& T_S_C, const Eigen::Matrix<double, 6, 6>& fit_covariance_S,
                                     const Eigen::Isometry3d& T_S_to) {
   // The old map where the camera was found lies as the tracker's drift from S's anchor placed it:
   // as uncertain as the camera's fit, about its centre.
   const Eigen::Vector2d old_drift = driftSigma(config, (T_S_C.translation() - T_S_from.translation()).norm());
   Eigen::Matrix<double, 6, 6> camera_covariance = fit_covariance_S;
-  camera_covariance.diagonal() += (Eigen::Matrix<double, 6, 1>() << Eigen::Vector3d::Constant(old_drift(1) * old_drift(1)),
-                                   Eigen::Vector3d::Constant(old_drift(0) * old_drift(0))).finished();
+  camera_covariance.diagonal() += threeAndThree(old_drift(1) * old_drift(1), old_drift(0) * old_drift(0));  // [w; v]
   // A small motion xi = [w; v] of the camera about its centre c (along S's axes) moves the `to`
   // node, at (R, t) in S, by R^T w (rotation) and R^T (v + w x (t - c)) (translation), in its own
   // frame: the edge's error, translation first.
@@ -82,8 +83,7 @@ PoseInformation loopEdgeInformation(const LoopClosureConfig& config, const Eigen
   const double sigma_rad = config.loop_sigma_deg * kRadPerDeg;
   const double sigma2_m = config.loop_sigma_m * config.loop_sigma_m + own_drift(0) * own_drift(0);
   const double sigma2_rad = sigma_rad * sigma_rad + own_drift(1) * own_drift(1);
-  covariance.diagonal() += (Eigen::Matrix<double, 6, 1>() << Eigen::Vector3d::Constant(sigma2_m),
-                            Eigen::Vector3d::Constant(sigma2_rad)).finished();
+  covariance.diagonal() += threeAndThree(sigma2_m, sigma2_rad);
   // Inverted through its eigen decomposition: along an unconstrained direction the variance is
   // kUnconstrainedVariance and the information next to zero, without a near-singular solve.
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(0.5 * (covariance + covariance.transpose()));

@@ -23,6 +23,7 @@
 #include "sdf_tracker/cli/output_folder.h"
 #include "sdf_tracker/cli/report.h"
 #include "sdf_tracker/cli/tracker_alone.h"
+#include "sdf_tracker/eval/evaluation.h"
 #include "sdf_tracker/graph/pose_graph.h"
 #include "sdf_tracker/io/files.h"
 #include "sdf_tracker/io/map_file.h"
@@ -279,6 +280,11 @@ int run(int argc, char** argv) {
   std::string first_swap_error;
   std::string first_unreadable;
   st::tools::ProgressBar progress(sequence.size(), !args.has("quiet"));
+  // A line of its own while the bar is drawn: the bar's line is ended first.
+  const auto aside = [&progress](std::ostream& out, const std::string& line) {
+    progress.finish();
+    out << line << std::endl;
+  };
   const auto start = std::chrono::steady_clock::now();
   std::vector<double> single_frame_errors_m, single_frame_mahalanobis;  // --fuse-ground-truth
   std::vector<double> search_ms;              // frames spent searching for the camera (Relocalise)
@@ -295,8 +301,7 @@ int run(int argc, char** argv) {
     } catch (const std::runtime_error& e) {
       // As the node does with a bad image: this frame is bad input, the run goes on.
       std::string message = e.what();
-      progress.finish();
-      std::cerr << "frame " << i << ": " << message << ": skipped\n";
+      aside(std::cerr, "frame " + std::to_string(i) + ": " + message + ": skipped");
       if (unreadable++ == 0) first_unreadable = message;
       ++failed;
       std::replace(message.begin(), message.end(), ',', ';');
@@ -313,10 +318,8 @@ int run(int argc, char** argv) {
         colour = sequence.colour(i);
       } catch (const std::runtime_error& e) {
         // The depth is tracked and fused all the same, without colour; said once, counted.
-        if (colour_errors++ == 0) {
-          progress.finish();
-          std::cerr << "frame " << i << ": " << e.what() << ": fused without colour\n";
-        }
+        if (colour_errors++ == 0)
+          aside(std::cerr, "frame " + std::to_string(i) + ": " + e.what() + ": fused without colour");
       }
     }
     const st::ColourImage* colour_in = colour ? &*colour : nullptr;
@@ -371,8 +374,7 @@ int run(int argc, char** argv) {
       loop_events.push_back(solved.str());
     }
     if (!args.has("quiet")) {
-      if (!loop_events.empty()) progress.finish();
-      for (const std::string& event : loop_events) std::cout << "frame " << i << ": " << event << std::endl;
+      for (const std::string& event : loop_events) aside(std::cout, "frame " + std::to_string(i) + ": " + event);
     }
     if (!true_T_W_C.empty() && !report.initialised_map && t.tracked()) {
       const Eigen::Vector3d error_m = t.T_W_C.translation() - true_T_W_C[i]->translation();
@@ -391,14 +393,9 @@ int run(int argc, char** argv) {
       if (report.fused) fusion_ms.push_back(report.fusion_ms);
       frame_ms.push_back(report.tracking_ms + report.fusion_ms + cast_ms);
     }
-    if (!report.swap_notice.empty()) {
-      progress.finish();
-      std::cout << report.swap_notice << std::endl;
-    }
-    if (!report.swap_warning.empty()) {
-      progress.finish();
-      std::cerr << "frame " << i << ": warning: " << report.swap_warning << "\n";
-    }
+    if (!report.swap_notice.empty()) aside(std::cout, report.swap_notice);
+    if (!report.swap_warning.empty())
+      aside(std::cerr, "frame " + std::to_string(i) + ": warning: " + report.swap_warning);
     std::string message = t.message;
     const auto say = [&message](const std::string& text) { message += (message.empty() ? "" : "; ") + text; };
     if (report.loop.searched && !report.loop.message.empty()) {
@@ -409,8 +406,7 @@ int run(int argc, char** argv) {
       // Said once as it happens (every frame after it may fail alike); each frame's is in frames.csv.
       if (swap_errors++ == 0) {
         first_swap_error = report.swap_error;
-        progress.finish();
-        std::cerr << "frame " << i << ": " << report.swap_error << " (later swap errors: frames.csv)\n";
+        aside(std::cerr, "frame " + std::to_string(i) + ": " + report.swap_error + " (later swap errors: frames.csv)");
       }
       say(report.swap_error);
     }
@@ -493,12 +489,12 @@ int run(int argc, char** argv) {
             << "(bad_input), the first: " << first_unreadable << "\n";
   }
   summary << "speed " << sequence.size() / elapsed_s << " frames/s including file reading; per frame (ms): median "
-          << st::tools::percentile(frame_ms, 0.5) << ", p95 " << st::tools::percentile(frame_ms, 0.95) << "; tracking median "
-          << st::tools::percentile(tracking_ms, 0.5) << ", fusion median " << st::tools::percentile(fusion_ms, 0.5);
-  if (!raycast_ms.empty()) summary << ", ray casting median " << st::tools::percentile(raycast_ms, 0.5);
+          << st::evaluation::percentile(frame_ms, 0.5) << ", p95 " << st::evaluation::percentile(frame_ms, 0.95) << "; tracking median "
+          << st::evaluation::percentile(tracking_ms, 0.5) << ", fusion median " << st::evaluation::percentile(fusion_ms, 0.5);
+  if (!raycast_ms.empty()) summary << ", ray casting median " << st::evaluation::percentile(raycast_ms, 0.5);
   if (!search_ms.empty()) {
     summary << "\nrelocalisation: " << search_ms.size() << " frames searched the map for the camera (ms per frame: "
-            << "median " << st::tools::percentile(search_ms, 0.5) << ", max " << st::tools::percentile(search_ms, 1.0) << "), "
+            << "median " << st::evaluation::percentile(search_ms, 0.5) << ", max " << st::evaluation::percentile(search_ms, 1.0) << "), "
             << relocalisations << " found it";
   }
   if (odometry) {
@@ -522,15 +518,15 @@ int run(int argc, char** argv) {
     summary << "\nloops: " << pipeline.loopsClosed() << " closed, " << pipeline.loopsRejected()
             << " rejected by the pose graph; " << loop_search_ms.size() << " frames searched for one";
     if (!loop_search_ms.empty()) {
-      summary << " (off the tracking thread; ms per frame: median " << st::tools::percentile(loop_search_ms, 0.5)
-              << ", max " << st::tools::percentile(loop_search_ms, 1.0) << ")";
+      summary << " (off the tracking thread; ms per frame: median " << st::evaluation::percentile(loop_search_ms, 0.5)
+              << ", max " << st::evaluation::percentile(loop_search_ms, 1.0) << ")";
     }
     if (optimise_ms.empty()) {
       summary << "; the graph was never solved (no loop): trajectory.txt is the path as published";
     } else {
       summary << "; graph solved " << optimise_ms.size() << (optimise_ms.size() == 1 ? " time" : " times")
-              << " (off the tracking thread) in " << st::tools::percentile(optimise_ms, 0.5) << " ms (median), "
-              << st::tools::percentile(optimise_ms, 1.0) << " ms (max); trajectory.txt is the optimised path, "
+              << " (off the tracking thread) in " << st::evaluation::percentile(optimise_ms, 0.5) << " ms (median), "
+              << st::evaluation::percentile(optimise_ms, 1.0) << " ms (max); trajectory.txt is the optimised path, "
               << "trajectory_online.txt the one published at the time";
     }
   }
@@ -567,24 +563,24 @@ int run(int argc, char** argv) {
   const std::vector<std::pair<const char*, const std::vector<double>*>> stages = {
       {"frame", &frame_ms}, {"tracking", &tracking_ms}, {"fusion", &fusion_ms}, {"raycast", &raycast_ms}};
   for (size_t i = 0; i < stages.size(); ++i) {
-    json << (i ? ", " : "") << "\"" << stages[i].first << "_median\": " << jsonNumber(st::tools::percentile(*stages[i].second, 0.5))
-         << ", \"" << stages[i].first << "_p95\": " << jsonNumber(st::tools::percentile(*stages[i].second, 0.95));
+    json << (i ? ", " : "") << "\"" << stages[i].first << "_median\": " << jsonNumber(st::evaluation::percentile(*stages[i].second, 0.5))
+         << ", \"" << stages[i].first << "_p95\": " << jsonNumber(st::evaluation::percentile(*stages[i].second, 0.95));
   }
   json << "},\n  \"peak_rss_mb\": " << jsonNumber(peak_rss_mb)
        << ",\n  \"grid_mb\": " << jsonNumber(pipeline.mapMemoryBytes() / 1048576.0)
        << ",\n  \"submaps\": " << pipeline.submapCount() << ",\n  \"loops_closed\": " << pipeline.loopsClosed()
        << ",\n  \"loops_rejected\": " << pipeline.loopsRejected() << ",\n  \"loop_search\": {\"searched_frames\": "
-       << loop_search_ms.size() << ", \"ms_median\": " << jsonNumber(st::tools::percentile(loop_search_ms, 0.5))
-       << ", \"ms_max\": " << jsonNumber(st::tools::percentile(loop_search_ms, 1.0))
+       << loop_search_ms.size() << ", \"ms_median\": " << jsonNumber(st::evaluation::percentile(loop_search_ms, 0.5))
+       << ", \"ms_max\": " << jsonNumber(st::evaluation::percentile(loop_search_ms, 1.0))
        << "},\n  \"graph_solve\": {\"solves\": " << optimise_ms.size()
-       << ", \"ms_median\": " << jsonNumber(st::tools::percentile(optimise_ms, 0.5))
-       << ", \"ms_max\": " << jsonNumber(st::tools::percentile(optimise_ms, 1.0)) << "}"
+       << ", \"ms_median\": " << jsonNumber(st::evaluation::percentile(optimise_ms, 0.5))
+       << ", \"ms_max\": " << jsonNumber(st::evaluation::percentile(optimise_ms, 1.0)) << "}"
        << ",\n  \"swapped_mb\": "
        << jsonNumber(pipeline.memoryBudget() ? pipeline.memoryBudget()->swap().bytesOnDisk() / 1048576.0 : 0.0)
        << ",\n  \"elapsed_s\": " << jsonNumber(elapsed_s)
        << ",\n  \"relocalisation\": {\"searched_frames\": " << search_ms.size() << ", \"found\": " << relocalisations
-       << ", \"ms_median\": " << jsonNumber(st::tools::percentile(search_ms, 0.5))
-       << ", \"ms_max\": " << jsonNumber(st::tools::percentile(search_ms, 1.0))
+       << ", \"ms_median\": " << jsonNumber(st::evaluation::percentile(search_ms, 0.5))
+       << ", \"ms_max\": " << jsonNumber(st::evaluation::percentile(search_ms, 1.0))
        << ", \"keyframes\": " << pipeline.places().keyframes().size() << "}";
   if (!true_T_W_C.empty()) {
     const st::tools::SingleFrameErrors errors(single_frame_errors_m, single_frame_mahalanobis);

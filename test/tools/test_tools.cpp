@@ -57,16 +57,6 @@ std::string shortSequence(int frames) {
   return dir;
 }
 
-TEST(Report, PercentilesInterpolateBetweenRanks) {
-  EXPECT_EQ(percentile({}, 0.5), 0.0);
-  EXPECT_EQ(percentile({7.0}, 0.95), 7.0);
-  EXPECT_DOUBLE_EQ(percentile({4.0, 2.0}, 0.5), 3.0) << "the median of two is their mean, not the larger";
-  EXPECT_DOUBLE_EQ(percentile({3.0, 1.0, 2.0}, 0.5), 2.0);
-  EXPECT_DOUBLE_EQ(percentile({0.0, 10.0, 20.0, 30.0, 40.0}, 0.95), 38.0);
-  EXPECT_EQ(percentile({5.0, 1.0, 9.0}, 1.0), 9.0);
-  EXPECT_EQ(percentile({5.0, 1.0, 9.0}, 0.0), 1.0);
-}
-
 TEST(Json, StringsAreEscapedAndNonFiniteNumbersAreNull) {
   EXPECT_EQ(jsonString("a\tb\"c\\d\n"), "\"a\\u0009b\\\"c\\\\d\\u000a\"");
   EXPECT_EQ(jsonNumber(0.25), "0.25");

@@ -48,6 +48,16 @@ TEST(Evaluation, SummaryStatistics) {
   EXPECT_DOUBLE_EQ(s.rmse, std::sqrt(30.0 / 4.0));
 }
 
+TEST(Evaluation, PercentilesInterpolateBetweenRanks) {
+  EXPECT_EQ(evaluation::percentile({}, 0.5), 0.0);
+  EXPECT_EQ(evaluation::percentile({7.0}, 0.95), 7.0);
+  EXPECT_DOUBLE_EQ(evaluation::percentile({4.0, 2.0}, 0.5), 3.0) << "the median of two is their mean, not the larger";
+  EXPECT_DOUBLE_EQ(evaluation::percentile({3.0, 1.0, 2.0}, 0.5), 2.0);
+  EXPECT_DOUBLE_EQ(evaluation::percentile({0.0, 10.0, 20.0, 30.0, 40.0}, 0.95), 38.0);
+  EXPECT_EQ(evaluation::percentile({5.0, 1.0, 9.0}, 1.0), 9.0);
+  EXPECT_EQ(evaluation::percentile({5.0, 1.0, 9.0}, 0.0), 1.0);
+}
+
 TEST(Evaluation, AssociatesNearestTimestampsWithinTolerance) {
   std::vector<io::StampedPose> a, b;
   for (double t : {0.0, 0.1, 0.2, 0.5}) a.push_back({t, Eigen::Isometry3d::Identity()});

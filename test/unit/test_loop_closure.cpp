@@ -207,8 +207,8 @@ PipelineConfig loopPipeline(double submap_m) {
   config.loops.enabled = true;
   config.loops.check_interval_frames = 5;
   // The tracker's drift with the circle's depth error (4 % at the image's corners, turning all the
-  // way): between a submap's anchor and a frame 0.3-0.5 m on, 5 % of the way and 2 deg per metre,
-  // four times the default model's (LoopClosureConfig), which the edges state.
+  // way): between a submap's anchor and a frame 0.25-0.5 m on, 5 % of the way and 2 deg per metre,
+  // 2.5 and 4 times the default model's (LoopClosureConfig), which the edges state.
   config.loops.odometry_drift = 0.05;
   config.loops.odometry_drift_deg_per_m = 2.0;
   return config;

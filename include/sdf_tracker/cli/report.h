@@ -25,10 +25,6 @@ std::string formatAccuracy(const Accuracy& accuracy);
 /// ground truth), and the absolute error over time. Written as PNG.
 void writeAccuracyPlot(const std::string& path, const Accuracy& accuracy, const std::string& title);
 
-/// The q-quantile (0..1) of `values`, interpolated between the two ranks around q (n - 1)
-/// (numpy's default: the median of two values is their mean); 0 for none.
-double percentile(std::vector<double> values, double q);
-
 /// JSON text of a string (quoted, escaped) and of a number (null when not finite).
 std::string jsonString(const std::string& text);
 std::string jsonNumber(double value);

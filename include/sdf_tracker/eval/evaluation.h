@@ -21,6 +21,10 @@ struct ErrorStats {
 
 ErrorStats summarize(std::vector<double> errors);
 
+/// The q-quantile (0..1) of `values`, interpolated between the two ranks around q (n - 1)
+/// (numpy's default: the median of two values is their mean); 0 for none.
+double percentile(std::vector<double> values, double q);
+
 /// Pairs (estimate index, ground-truth index) whose timestamps are closest to each other and
 /// within max_difference_s, each index used at most once, in time order.
 std::vector<std::pair<size_t, size_t>> associate(const std::vector<io::StampedPose>& estimate,
