@@ -28,7 +28,7 @@ sdf_tracker_part(places SOURCES place_descriptor place_memory DEPENDS camera)
 sdf_tracker_part(relocalisation SOURCES coarse_field relocaliser view_agreement DEPENDS tracking surface places)
 # Loop closure: the pose graph over submaps, solved by Ceres.
 sdf_tracker_part(graph SOURCES background_solver pose_graph DEPENDS util LINK Ceres::ceres)
-sdf_tracker_part(pipeline SOURCES loop_closure parameters pipeline submaps tracked_path
+sdf_tracker_part(pipeline SOURCES loop_closure parameters pipeline submap_store submaps tracked_path
   DEPENDS fusion tracking surface relocalisation graph)
 
 # Around the tracker: files (OpenCV for images only), the synthetic scenes, trajectory errors.

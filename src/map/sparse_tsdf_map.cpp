@@ -255,6 +255,13 @@ std::unique_ptr<FieldSampler> SparseTsdfMap::sampler(const Eigen::AlignedBox3f& 
   return std::make_unique<RegionReader>(*this, region_W);
 }
 
+Eigen::AlignedBox3f mappedBox(const TsdfMap& map) {
+  if (map.type() != MapType::kSparse) return map.holdableRegion();
+  Eigen::Vector3i first, dims;
+  static_cast<const SparseTsdfMap&>(map).bounds(&first, &dims);
+  return Eigen::AlignedBox3f(map.position(first), map.position(first + dims - Eigen::Vector3i::Ones()));
+}
+
 TsdfVolume toDenseVolume(const TsdfMap& map) {
   if (map.type() == MapType::kDense) return static_cast<const TsdfVolume&>(map);
   const auto& sparse = static_cast<const SparseTsdfMap&>(map);

@@ -109,13 +109,14 @@ void LoopDetector::reset() {
   running_ = std::future<Outcome>();
   relocaliser_.cancel();
   search_submap_ = -1;
+  search_map_.reset();
   search_frames_ = 0;
   frames_until_check_ = config_.check_interval_frames;
   joined_.clear();
 }
 
 std::optional<int> LoopDetector::candidate(const DepthImage& depth, const Eigen::Isometry3d& T_map_C,
-                                           const SubmapPlace& active, const std::vector<Submap>& closed,
+                                           const SubmapPlace& active, const SubmapStore& closed,
                                            const PlaceMemory& places, const std::vector<int>& keyframe_submaps) const {
   const int newest_candidate = active.node - config_.min_submap_age;
   if (newest_candidate < 0 || places.empty()) return std::nullopt;
@@ -127,8 +128,8 @@ std::optional<int> LoopDetector::candidate(const DepthImage& depth, const Eigen:
     const int submap = keyframe_submaps[k];
     if (submap < 0 || submap > newest_candidate || submap >= static_cast<int>(closed.size())) continue;
     if (std::find(joined_.begin(), joined_.end(), submap) != joined_.end()) continue;
-    if (active.path_m - closed[submap].place.path_m < config_.min_path_m) continue;
-    const Eigen::Isometry3d offset = T_map_C.inverse() * closed[submap].place.T_map_W * keyframes[k].T_W_C;
+    if (active.path_m - closed.place(submap).path_m < config_.min_path_m) continue;
+    const Eigen::Isometry3d offset = T_map_C.inverse() * closed.place(submap).T_map_W * keyframes[k].T_W_C;
     if (offset.translation().norm() > config_.search_radius_m ||
         rotationAngle(offset) > config_.search_angle_deg * kRadPerDeg) {
       continue;
@@ -144,7 +145,7 @@ std::optional<int> LoopDetector::candidate(const DepthImage& depth, const Eigen:
 
 LoopDetector::Step LoopDetector::step(const DepthImage& depth, const PinholeCamera& camera,
                                       const Eigen::Isometry3d& T_W_C, const SubmapPlace& active,
-                                      const std::vector<Submap>& closed, const PlaceMemory& places,
+                                      const SubmapStore& closed, const PlaceMemory& places,
                                       const std::vector<int>& keyframe_submaps) {
   Step finished;
   if (running_.valid()) {
@@ -169,12 +170,13 @@ LoopDetector::Step LoopDetector::step(const DepthImage& depth, const PinholeCame
   } else {
     job.motion = last_search_T_W_C_.inverse() * T_W_C;
   }
-  const Submap& old = closed[search_submap_];
   job.depth = depth;
   job.camera = camera;
-  job.map = old.map.get();
+  job.map = search_map_;
+  job.closed = &closed;
+  job.submap = search_submap_;
   // Where the graph puts the camera in the old submap: the first start of the search.
-  job.guess = old.place.T_map_W.inverse() * T_map_C;
+  job.guess = closed.place(search_submap_).T_map_W.inverse() * T_map_C;
   job.T_W_C = T_W_C;
   job.frame_submap = active.node;
   last_search_T_W_C_ = T_W_C;
@@ -188,10 +190,16 @@ LoopDetector::Outcome LoopDetector::search(Job job) {
   const auto start = std::chrono::steady_clock::now();
   Outcome outcome;
   try {
-    if (job.begins) relocaliser_.begin(*job.map);
+    if (job.begins) {
+      job.map = job.closed->map(job.submap);
+      relocaliser_.begin(*job.map);
+    }
     outcome.found = relocaliser_.step(job.depth, job.camera, *job.map, search_places_, {job.guess}, job.motion);
   } catch (const std::invalid_argument&) {
     outcome.no_surface = true;  // begin(): a submap without a surface
+  } catch (const std::runtime_error& e) {
+    outcome.no_surface = true;  // map(): the swap file failed
+    outcome.read_error = e.what();
   }
   outcome.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   job.depth = DepthImage();
@@ -202,8 +210,12 @@ LoopDetector::Outcome LoopDetector::search(Job job) {
 LoopDetector::Step LoopDetector::conclude(Outcome outcome) {
   if (outcome.no_surface) {
     search_submap_ = -1;
-    return Step();  // nothing was searched
+    search_map_.reset();
+    Step nothing;  // nothing was searched
+    nothing.message = outcome.read_error;
+    return nothing;
   }
+  search_map_ = outcome.job.map;
   Step result;
   result.submap = search_submap_;
   result.search_ms = outcome.ms;
@@ -234,6 +246,7 @@ LoopDetector::Step LoopDetector::conclude(Outcome outcome) {
   }
   relocaliser_.cancel();
   search_submap_ = -1;
+  search_map_.reset();
   frames_until_check_ = result.match ? config_.check_interval_frames : std::max(1, config_.retry_after_frames);
   return result;
 }

@@ -299,8 +299,8 @@ std::vector<ParameterSpec> buildTable() {
       },
       [](const S& s) { return ParameterValue(std::string(toString(s.pipeline.volume.type))); }});
   t.push_back(bound<double>("MaxMemoryMB", "MiB",
-                            "sparse map: beyond this, blocks far from the camera go to a swap file in SwapDirectory "
-                            "and come back when seen again; 0 no limit",
+                            "sparse map: beyond this, blocks far from the camera (with submaps: whole closed submaps) "
+                            "go to a swap file in SwapDirectory and come back when needed again; 0 no limit",
                             closed(0.0, 1e7), same(0.0), kAtStart, kAll,
                             [](auto& s) -> auto& { return s.pipeline.max_map_memory_mb; }));
   t.push_back(ParameterSpec{
@@ -362,7 +362,7 @@ std::vector<ParameterSpec> buildTable() {
   t.push_back(bound<double>("SubmapSize", "m",
                             "sparse map: the map as submaps along the path (what loop closure moves), a new one once "
                             "the camera is this far from where the active one started; 0 one map (the default preset's "
-                            "1 m holds for a sparse map without MaxMemoryMB: one map where it was not typed)",
+                            "1 m holds for a sparse map; the node keeps to one map under MaxMemoryMB)",
                             closed(0.0, 1e4), {1.0, 0.0, 0.0}, kAtStart, kAll,
                             [](auto& s) -> auto& { return s.pipeline.submaps.max_distance_m; }));
   t.push_back(bound<double>("SubmapTurn", "deg",
@@ -469,19 +469,11 @@ std::vector<std::string> Settings::validate() const {
   if (p.submaps.enabled() && p.volume.type == MapType::kDense) {
     v.require(false, "SubmapSize=" + text(p.submaps.max_distance_m) + " applies to MapType=sparse only");
   }
-  if (p.submaps.enabled() && p.max_map_memory_mb > 0.0) {
-    v.require(false, "SubmapSize=" + text(p.submaps.max_distance_m) + " and MaxMemoryMB=" + text(p.max_map_memory_mb) +
-                         " cannot be used together yet: swapping keeps to one map (set one of them to 0)");
-  }
   if (p.loops.enabled && !p.submaps.enabled()) {
-    // Named by what keeps to one map: a dense grid or swapping hold no submaps at all.
+    // Named by what keeps to one map: a dense grid holds no submaps at all.
     if (p.volume.type == MapType::kDense) {
       v.require(false, "LoopClosure=true applies to MapType=sparse only: loops move submaps, which a dense grid "
                        "cannot hold (set LoopClosure=false, or MapType=sparse)");
-    } else if (p.max_map_memory_mb > 0.0) {
-      v.require(false, "LoopClosure=true and MaxMemoryMB=" + text(p.max_map_memory_mb) +
-                           " cannot be used together yet: loops move submaps, and swapping keeps to one map (set "
-                           "one of them off)");
     } else {
       v.require(false, "LoopClosure=true needs SubmapSize > 0: loops move submaps (got SubmapSize=" +
                            text(p.submaps.max_distance_m) + ")");
@@ -503,7 +495,7 @@ std::vector<std::string> Settings::validate() const {
 }
 
 std::optional<std::string> Settings::keepToOneMapWhereNeeded(const std::vector<std::string>& given,
-                                                             bool loads_dense_map) {
+                                                             bool loads_dense_map, bool swaps_submaps) {
   if (!pipeline.submaps.enabled()) {
     // One map typed (SubmapSize=0): loop closure, which moves submaps, goes too unless typed.
     if (!pipeline.loops.enabled || isGiven(given, "LoopClosure")) return std::nullopt;
@@ -514,7 +506,7 @@ std::optional<std::string> Settings::keepToOneMapWhereNeeded(const std::vector<s
   std::string why;
   if (!pipeline.loops.enabled && isGiven(given, "LoopClosure")) why = "LoopClosure=false, and submaps serve loop closure";
   else if (pipeline.volume.type == MapType::kDense) why = "MapType=dense holds no submaps";
-  else if (pipeline.max_map_memory_mb > 0.0) why = "swapping (MaxMemoryMB=" + toText(pipeline.max_map_memory_mb) + ") keeps to one map";
+  else if (pipeline.max_map_memory_mb > 0.0 && !swaps_submaps) why = "swapping (MaxMemoryMB=" + toText(pipeline.max_map_memory_mb) + ") keeps to one map here";
   else if (loads_dense_map) why = "the map loaded is a dense grid (.vti), which holds no submaps";
   if (why.empty()) return std::nullopt;
   std::string note = "one map, no submaps (SubmapSize=0): " + why;

@@ -8,8 +8,12 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include <omp.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 
 #include "sdf_tracker/map/map_merge.h"
 #include "sdf_tracker/map/overlaid_map.h"
@@ -49,25 +53,36 @@ BlockBox blocksNearView(const SparseTsdfMap& map, const PinholeCamera& camera, c
   return map.blockRange(Eigen::AlignedBox3f(view.min().array() - margin, view.max().array() + margin));
 }
 
-/// The budget for the config, or none.
-std::unique_ptr<MapMemoryBudget> makeBudget(const PipelineConfig& config, MapType type) {
-  if (config.max_map_memory_mb <= 0.0 || type != MapType::kSparse) return nullptr;
+/// MaxMemoryMB in bytes.
+size_t budgetBytes(const PipelineConfig& config) {
+  return std::max<size_t>(1, static_cast<size_t>(config.max_map_memory_mb * 1048576.0));
+}
+
+/// Returns open(directory) for the swap file's directory; a file that cannot be opened there is
+/// an invalid config (std::invalid_argument naming the parameters).
+template <typename Open>
+auto openSwapFile(const PipelineConfig& config, Open open) {
   const std::string directory =
       config.swap_directory.empty() ? std::filesystem::temp_directory_path().string() : config.swap_directory;
   try {
-    const size_t bytes = std::max<size_t>(1, static_cast<size_t>(config.max_map_memory_mb * 1048576.0));
-    return std::make_unique<MapMemoryBudget>(bytes, directory);
+    return open(directory);
   } catch (const std::runtime_error& e) {
     throw std::invalid_argument(std::string("MaxMemoryMB needs a swap file (SwapDirectory): ") + e.what());
   }
 }
 
-/// The box that holds every voxel the map may have observed: a sparse map's blocks, a dense grid.
-Eigen::AlignedBox3f mappedBox(const TsdfMap& map) {
-  if (map.type() != MapType::kSparse) return map.holdableRegion();
-  Eigen::Vector3i first, dims;
-  static_cast<const SparseTsdfMap&>(map).bounds(&first, &dims);
-  return Eigen::AlignedBox3f(map.position(first), map.position(first + dims - Eigen::Vector3i::Ones()));
+/// The budget of one sparse map (blocks swapped), or none.
+std::unique_ptr<MapMemoryBudget> makeBudget(const PipelineConfig& config, MapType type) {
+  if (config.max_map_memory_mb <= 0.0 || type != MapType::kSparse || config.submaps.enabled()) return nullptr;
+  return openSwapFile(config, [&](const std::string& directory) {
+    return std::make_unique<MapMemoryBudget>(budgetBytes(config), directory);
+  });
+}
+
+/// The swap file of whole submaps, or none.
+std::unique_ptr<BlockSwapFile> makeSubmapSwapFile(const PipelineConfig& config) {
+  if (config.max_map_memory_mb <= 0.0 || !config.submaps.enabled()) return nullptr;
+  return openSwapFile(config, [](const std::string& directory) { return std::make_unique<BlockSwapFile>(directory); });
 }
 
 /// The grid's geometry with its origin placed for the start pose.
@@ -90,10 +105,7 @@ std::vector<std::string> PipelineConfig::validate() const {
   v.merge("submaps.", submaps.validate());
   v.merge("loops.", loops.validate());
   v.require(!loops.enabled || submaps.enabled(), "loop closure needs submaps (submaps.max_distance_m is 0)");
-  if (submaps.enabled()) {
-    v.require(volume.type == MapType::kSparse, "submaps need the sparse map (volume.type is dense)");
-    v.require(max_map_memory_mb == 0.0, "submaps cannot be used with max_map_memory_mb > 0 yet");
-  }
+  if (submaps.enabled()) v.require(volume.type == MapType::kSparse, "submaps need the sparse map (volume.type is dense)");
   v.requireNonNegative("min_depth_m", min_depth_m);
   v.require(max_depth_m > min_depth_m, "max_depth_m must be > min_depth_m (got " + std::to_string(max_depth_m) +
                                            " <= " + std::to_string(min_depth_m) + ")");
@@ -130,6 +142,7 @@ SdfPipeline::SdfPipeline(const PipelineConfig& config)
   throwIfInvalid("pipeline config", config.validate());
   map_ = makeMap(placedVolume(config));
   budget_ = makeBudget(config, map_->type());
+  closed_submaps_.reset(makeSubmapSwapFile(config));
   integrator_ = std::make_unique<Integrator>(config.integrator);
   tracker_ = std::make_unique<Tracker>(config.tracker);
   places_ = std::make_unique<PlaceMemory>(config.places);
@@ -148,6 +161,7 @@ void SdfPipeline::clearSubmaps() {
   search_map_.reset();
   search_places_.reset();
   closed_submaps_.clear();
+  told_of_submap_swap_ = submaps_over_budget_ = false;
   active_ = SubmapPlace();
   keyframe_submaps_.clear();
   if (graph_solver_) graph_solver_->cancel();
@@ -196,6 +210,7 @@ void SdfPipeline::setMap(std::unique_ptr<TsdfMap> map, std::unique_ptr<PlaceMemo
   map_ = std::move(map);
   config_.volume = map_->config();
   budget_ = makeBudget(config_, map_->type());
+  closed_submaps_.reset(makeSubmapSwapFile(config_));
   places_ = places ? std::move(places) : std::make_unique<PlaceMemory>(config_.places);
   keyframe_submaps_.assign(places_->keyframes().size(), 0);
   startInLoadedMap(Eigen::Isometry3d::Identity());
@@ -220,9 +235,10 @@ void SdfPipeline::setSubmaps(SubmapGraph saved, std::unique_ptr<PlaceMemory> pla
   map_ = std::move(saved.submaps.back().map);
   active_ = saved.submaps.back().place;
   saved.submaps.pop_back();
-  closed_submaps_ = std::move(saved.submaps);
   config_.volume = map_->config();
-  budget_.reset();  // submaps have none (PipelineConfig::validate)
+  budget_.reset();  // submaps swap whole (makeBudget)
+  closed_submaps_.reset(makeSubmapSwapFile(config_));
+  for (Submap& submap : saved.submaps) closed_submaps_.add(std::move(submap));
   graph_ = std::move(graph);
   // The saved session's last solution placed them; loops() and the counts are this session's.
   solved_edges_ = graph_.edges().size();
@@ -241,7 +257,9 @@ SubmapGraph SdfPipeline::copySubmaps() const {
   if (closed_submaps_.empty()) {
     copy.submaps.push_back(Submap{copyWholeMap(), active_});
   } else {
-    for (const Submap& submap : closed_submaps_) copy.submaps.push_back(Submap{submap.map->clone(), submap.place});
+    for (int node = 0; node < static_cast<int>(closed_submaps_.size()); ++node) {
+      copy.submaps.push_back(Submap{closed_submaps_.map(node)->clone(), closed_submaps_.place(node)});
+    }
     copy.submaps.push_back(Submap{map_->clone(), active_});
   }
   // The graph as its latest solution placed the submaps: without the loops it rejected, and
@@ -274,8 +292,9 @@ void SdfPipeline::relocalise(const std::optional<Eigen::Isometry3d>& guess) {
     // A camera further from every mapped voxel than it sees cannot be in the map: its submaps,
     // each where the graph places it (the guess is in the map frame, where the search looks).
     Eigen::AlignedBox3d box = transformedBox(active_.T_map_W, Eigen::AlignedBox3d(mappedBox(*map_).cast<double>()));
-    for (const Submap& submap : closed_submaps_) {
-      box.extend(transformedBox(submap.place.T_map_W, Eigen::AlignedBox3d(mappedBox(*submap.map).cast<double>())));
+    for (int node = 0; node < static_cast<int>(closed_submaps_.size()); ++node) {
+      box.extend(transformedBox(closed_submaps_.place(node).T_map_W,
+                                Eigen::AlignedBox3d(closed_submaps_.mappedBox(node).cast<double>())));
     }
     const Eigen::Vector3d position = guess->translation();
     const Eigen::Vector3d outside = (box.min() - position).cwiseMax(position - box.max()).cwiseMax(0.0);
@@ -399,11 +418,73 @@ void SdfPipeline::evictAwayFrom(const Eigen::Isometry3d& T_W_C, const PinholeCam
   }
 }
 
+void SdfPipeline::swapOutSubmaps(FrameReport* report) {
+  if (!recent_merge_error_.empty()) report->swap_error = std::exchange(recent_merge_error_, std::string());
+  if (!closed_submaps_.swaps()) return;
+  const size_t budget = budgetBytes(config_);
+  size_t bytes = mapMemoryBytes();
+  if (bytes > budget) {
+    // Farthest first: the centre of what each holds, where the graph places it, from the camera.
+    const Eigen::Vector3d camera_map = mapPose().translation();
+    const int searched = loop_detector_ ? loop_detector_->searchedSubmap() : -1;
+    // The recent ones are held in their merge, once it landed (and read back to merge them again).
+    const bool recent_merged = recent_submaps_ && !recent_merge_.valid();
+    std::vector<std::pair<double, int>> candidates;
+    for (int node = 0; node + 1 < static_cast<int>(closed_submaps_.size()); ++node) {
+      if (closed_submaps_.swapped(node) || (isRecent(node) && !recent_merged) || node == searched) continue;
+      const Eigen::Vector3d centre = closed_submaps_.mappedBox(node).center().cast<double>();
+      candidates.emplace_back((closed_submaps_.place(node).T_map_W * centre - camera_map).norm(), node);
+    }
+    std::sort(candidates.begin(), candidates.end(), std::greater<>());
+    const auto low_water = static_cast<size_t>(MapMemoryBudget::kLowWater * static_cast<double>(budget));
+    for (const auto& [distance_m, node] : candidates) {
+      if (bytes <= low_water) break;
+      const size_t freed = closed_submaps_.inMemory(node)->memoryBytes();
+      try {
+        closed_submaps_.swapOut(node);
+      } catch (const std::runtime_error& e) {
+        report->swap_error = e.what();  // it stays in memory; the next frame tries again
+        break;
+      }
+      bytes -= std::min(bytes, freed);
+      ++report->submaps_swapped_out;
+    }
+#ifdef __GLIBC__
+    // A submap's blocks are freed one by one, amid the heap: glibc keeps their pages unless asked.
+    if (report->submaps_swapped_out > 0) malloc_trim(0);
+#endif
+  }
+  if (report->submaps_swapped_out > 0 && !told_of_submap_swap_) {
+    told_of_submap_swap_ = true;
+    std::ostringstream notice;
+    notice << "the map reached MaxMemoryMB=" << config_.max_map_memory_mb
+           << ": closed submaps far from the camera go to a swap file in " << closed_submaps_.swapDirectory()
+           << ", and are read back while a loop search, a save or a whole mesh needs them";
+    report->swap_notice = notice.str();
+  }
+  const bool over = bytes > budget;
+  if (over && !submaps_over_budget_) {
+    std::ostringstream warning;
+    warning << std::fixed << std::setprecision(2) << "the map holds " << bytes / 1048576.0
+            << " MiB, above MaxMemoryMB=" << std::defaultfloat << config_.max_map_memory_mb
+            << ": the active submap, the recent ones tracked with it (SubmapTrackRecent="
+            << config_.submaps.track_recent_m
+            << " m) merged, and one searched for a loop stay in memory, and need more; raise MaxMemoryMB, or "
+               "lower SubmapSize or SubmapTrackRecent";
+    report->swap_warning = warning.str();
+  }
+  submaps_over_budget_ = over;
+}
+
 std::unique_ptr<TsdfMap> SdfPipeline::copyWholeMap() const {
   if (!closed_submaps_.empty()) {
-    // Each where the graph places it.
+    // Each where the graph places it (those in the swap file read back while the merge runs).
+    std::vector<std::shared_ptr<const TsdfMap>> held;
     std::vector<PlacedMap> parts;
-    for (const Submap& submap : closed_submaps_) parts.push_back(placedSubmap(*submap.map, submap.place.T_map_W));
+    for (int node = 0; node < static_cast<int>(closed_submaps_.size()); ++node) {
+      held.push_back(closed_submaps_.map(node));
+      parts.push_back(placedSubmap(*held.back(), closed_submaps_.place(node).T_map_W));
+    }
     parts.push_back(placedSubmap(*map_, active_.T_map_W));
     return std::make_unique<SparseTsdfMap>(mergeMaps(parts));
   }
@@ -473,15 +554,14 @@ bool SdfPipeline::search(const DepthImage& filtered, const PinholeCamera& camera
 size_t SdfPipeline::mapMemoryBytes() const {
   size_t bytes = map_->memoryBytes() + (search_map_ ? search_map_->memoryBytes() : 0) +
                  (recent_submaps_ ? recent_submaps_->memoryBytes() : 0);
-  for (const Submap& submap : closed_submaps_) bytes += submap.map->memoryBytes();
-  return bytes;
+  return bytes + closed_submaps_.memoryBytes();
 }
 
 void SdfPipeline::startSubmap(bool after_search) {
   if (graph_.poses().empty()) graph_.addNode(active_.T_map_anchor());  // the first submap's node
-  closed_submaps_.push_back(Submap{std::move(map_), active_});
-  const SubmapPlace& closed = closed_submaps_.back().place;
-  map_ = makeMap(closed_submaps_.back().map->config());
+  closed_submaps_.add(Submap{std::move(map_), active_});
+  const SubmapPlace& closed = closed_submaps_.newestPlace();
+  map_ = makeMap(closed_submaps_.newest().config());
   active_ = SubmapPlace();
   active_.node = closed.node + 1;
   active_.T_W_anchor = T_W_C_;
@@ -490,15 +570,19 @@ void SdfPipeline::startSubmap(bool after_search) {
     // new submap to the one nearest it. No odometry ties it to the others (the way there was not
     // walked): the join counts as a long path, so that loops to them are sought at once and they
     // are not tracked with it as recent ones.
-    const auto nearest = std::min_element(closed_submaps_.begin(), closed_submaps_.end(), [&](const Submap& a, const Submap& b) {
-      return (a.place.T_map_anchor().translation() - T_W_C_.translation()).norm() <
-             (b.place.T_map_anchor().translation() - T_W_C_.translation()).norm();
-    });
+    const SubmapPlace* nearest = &closed;
+    for (int node = 0; node < static_cast<int>(closed_submaps_.size()); ++node) {
+      const SubmapPlace& place = closed_submaps_.place(node);
+      if ((place.T_map_anchor().translation() - T_W_C_.translation()).norm() <
+          (nearest->T_map_anchor().translation() - T_W_C_.translation()).norm()) {
+        nearest = &place;
+      }
+    }
     active_.path_m = closed.path_m + std::max(config_.loops.min_path_m, config_.submaps.track_recent_m);
     graph_.addNode(active_.T_map_anchor());
     // (The search's covariance is not kept: the loop's own sigma and the drift from that anchor.)
-    graph_.addEdge(PoseEdge{nearest->place.node, active_.node, nearest->place.T_map_anchor().inverse() * T_W_C_,
-                            loopEdgeInformation(config_.loops, nearest->place.T_map_anchor(), T_W_C_,
+    graph_.addEdge(PoseEdge{nearest->node, active_.node, nearest->T_map_anchor().inverse() * T_W_C_,
+                            loopEdgeInformation(config_.loops, nearest->T_map_anchor(), T_W_C_,
                                                 Eigen::Matrix<double, 6, 6>::Zero(), T_W_C_),
                             PoseEdgeKind::kLoop});
   } else {
@@ -514,12 +598,12 @@ void SdfPipeline::startSubmap(bool after_search) {
   if (!after_search && config_.submaps.track_recent_m > 0.0) {
     // Until the recent submaps' merge lands, frames are tracked against the one just closed (in
     // the same frame) overlaid by the new one.
-    overlayRecent(static_cast<const SparseTsdfMap&>(*closed_submaps_.back().map),
+    overlayRecent(static_cast<const SparseTsdfMap&>(closed_submaps_.newest()),
                   {{closed.node, Eigen::Isometry3d::Identity()}});
     mergeRecentSubmaps();
   } else {
     handover_fuses_previous_ = !after_search;
-    handover_map_ = after_search ? search_map_.get() : closed_submaps_.back().map.get();
+    handover_map_ = after_search ? search_map_.get() : &closed_submaps_.newest();
     handover_frames_left_ = handover_map_ ? config_.submaps.handover_frames : 0;
   }
   if (loop_detector_) {
@@ -532,27 +616,41 @@ void SdfPipeline::startSubmap(bool after_search) {
 
 void SdfPipeline::mergeRecentSubmaps() {
   waitForRecentMerge();  // (a merge still running would land after this one)
-  std::vector<PlacedMap> parts;
   RecentPlacements placements;
   const Eigen::Isometry3d T_active_map = active_.T_map_W.inverse();
-  for (size_t i = 0; i < closed_submaps_.size(); ++i) {
-    // Where the camera left submap i: where the next one started.
-    const double left_at_m = i + 1 < closed_submaps_.size() ? closed_submaps_[i + 1].place.path_m : active_.path_m;
-    if (active_.path_m - left_at_m > config_.submaps.track_recent_m) continue;
-    parts.push_back(placedSubmap(*closed_submaps_[i].map, T_active_map * closed_submaps_[i].place.T_map_W));
-    placements.emplace_back(closed_submaps_[i].place.node, parts.back().T_target_map);
+  for (int node = 0; node < static_cast<int>(closed_submaps_.size()); ++node) {
+    if (isRecent(node)) placements.emplace_back(node, T_active_map * closed_submaps_.place(node).T_map_W);
   }
-  if (parts.empty()) return;
-  // Closed submaps are not written to while they are tracked with recent ones (no handover).
-  recent_merge_ = std::async(std::launch::async, [parts = std::move(parts), placements = std::move(placements)]() {
+  if (placements.empty()) return;
+  // Closed submaps are not written to while they are tracked with recent ones (no handover). Those
+  // in the swap file (merged before, moved since by a graph solution) are read back here.
+  recent_merge_ = std::async(std::launch::async, [closed = &closed_submaps_, placements = std::move(placements)]() {
     omp_set_num_threads(1);  // this thread's own setting: the tracking keeps the other cores
-    return RecentMerge{std::make_unique<SparseTsdfMap>(mergeMaps(parts)), placements};
+    RecentMerge merge;
+    merge.placements = placements;
+    try {
+      std::vector<std::shared_ptr<const TsdfMap>> held;
+      std::vector<PlacedMap> parts;
+      for (const auto& [node, T_active_W] : placements) {
+        held.push_back(closed->map(node));
+        parts.push_back(placedSubmap(*held.back(), T_active_W));
+      }
+      merge.map = std::make_unique<SparseTsdfMap>(mergeMaps(parts));
+    } catch (const std::runtime_error& e) {
+      merge.error = e.what();  // the swap file failed
+    }
+    return merge;
   });
 }
 
 void SdfPipeline::landRecentMerge() {
   if (!recent_merge_.valid() || recent_merge_.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
   RecentMerge merged = recent_merge_.get();
+  if (!merged.map) {
+    // Tracked as before (the submap just closed overlaid), and said at the frame's end.
+    recent_merge_error_ = "the recent submaps could not be merged for tracking: " + merged.error;
+    return;
+  }
   recent_submaps_ = std::move(merged.map);
   overlayRecent(*recent_submaps_, std::move(merged.placements));
 }
@@ -577,6 +675,13 @@ void SdfPipeline::dropRecentSubmaps() {
   recent_placements_.clear();
 }
 
+bool SdfPipeline::isRecent(int node) const {
+  // Where the camera left it: where the next one started.
+  const double left_at_m =
+      node + 1 < static_cast<int>(closed_submaps_.size()) ? closed_submaps_.place(node + 1).path_m : active_.path_m;
+  return active_.path_m - left_at_m <= config_.submaps.track_recent_m;
+}
+
 bool SdfPipeline::recentSubmapsMoved() const {
   // A tenth of a voxel at the submap's reach (MaxDepth) is what a merge would change.
   const double voxel_m = config_.volume.voxel_size_m;
@@ -594,12 +699,14 @@ const SubmapPlace& SdfPipeline::submapPlace(int node) const {
   if (node < 0 || node >= static_cast<int>(closed_submaps_.size())) {
     throw std::out_of_range("no submap " + std::to_string(node) + " (there are " + std::to_string(submapCount()) + ")");
   }
-  return closed_submaps_[node].place;
+  return closed_submaps_.place(node);
 }
 
 std::vector<Eigen::Isometry3d> SdfPipeline::submapFrames() const {
   std::vector<Eigen::Isometry3d> frames;
-  for (const Submap& submap : closed_submaps_) frames.push_back(submap.place.T_map_W);
+  for (int node = 0; node < static_cast<int>(closed_submaps_.size()); ++node) {
+    frames.push_back(closed_submaps_.place(node).T_map_W);
+  }
   frames.push_back(active_.T_map_W);
   return frames;
 }
@@ -622,7 +729,7 @@ void SdfPipeline::addLoop(const LoopDetector::Step& step, LoopReport* report) {
   if (!step.match) return;
   // Where the anchor of the submap the frame was tracked in lies in the old one, by the camera
   // seen from both.
-  const SubmapPlace& old = closed_submaps_[step.match->submap].place;
+  const SubmapPlace& old = closed_submaps_.place(step.match->submap);
   const SubmapPlace& tracked_in = submapPlace(step.frame_submap);
   const Eigen::Isometry3d T_S_anchor = step.match->T_S_C * step.T_W_C.inverse() * tracked_in.T_W_anchor;
   const Eigen::Isometry3d T_old_anchor = old.T_W_anchor.inverse() * T_S_anchor;
@@ -926,12 +1033,13 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
     ++active_.frames_fused;
     if (handover_frames_left_ > 0) {
       if (handover_fuses_previous_) {
-        integrator_->integrate(filtered, ideal_camera, T_W_C_, closed_submaps_.back().map.get(), colour_in);
-        ++closed_submaps_.back().place.frames_fused;
+        integrator_->integrate(filtered, ideal_camera, T_W_C_, &closed_submaps_.newest(), colour_in);
+        ++closed_submaps_.newestPlace().frames_fused;
       }
       if (--handover_frames_left_ == 0) endHandover();
     }
     evictAwayFrom(T_W_C_, ideal_camera, furthest_m, &report);
+    swapOutSubmaps(&report);
     report.fusion_ms = millisecondsSince(start);
     report.fused = true;
     T_W_C_last_fused_ = T_W_C_;

@@ -95,7 +95,10 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
         // The submaps, oldest first, each where the pose graph places it; the active one last.
         const st::SdfPipeline& pipeline = *state_.pipeline;
         std::vector<LiveMapPart> parts;
-        for (const st::Submap& submap : pipeline.closedSubmaps()) parts.push_back({submap.map.get(), submap.place.T_map_W});
+        const st::SubmapStore& closed = pipeline.closedSubmaps();
+        for (int node = 0; node < static_cast<int>(closed.size()); ++node) {
+          parts.push_back({closed.inMemory(node), closed.place(node).T_map_W});  // (the node swaps none)
+        }
         parts.push_back({&pipeline.map(), pipeline.submapPlace(static_cast<int>(pipeline.submapCount()) - 1).T_map_W});
         return parts;
       },

@@ -113,6 +113,13 @@ std::string joinIterations(const std::vector<int>& iterations) {
 }
 
 
+/// The process's peak resident memory so far [MiB].
+double peakResidentMiB() {
+  struct rusage usage;
+  ::getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss / 1024.0;  // Linux reports kilobytes
+}
+
 int run(int argc, char** argv) {
   const st::tools::CommandLine args(
       argc, argv,
@@ -150,7 +157,7 @@ int run(int argc, char** argv) {
     return 0;
   }
   const bool loads_dense_map = st::io::readsAsDenseGrid(args.get("load-volume", ""));
-  if (const auto note = settings.keepToOneMapWhereNeeded(given, loads_dense_map)) std::cout << "note: " << *note << "\n";
+  if (const auto note = settings.keepToOneMapWhereNeeded(given, loads_dense_map, /*swaps_submaps=*/true)) std::cout << "note: " << *note << "\n";
   st::throwIfInvalid("parameters", settings.validate());
   for (const std::string& note : settings.withoutEffect(given)) std::cerr << "warning: --param " << note << "\n";
 #ifdef _OPENMP
@@ -421,6 +428,9 @@ int run(int argc, char** argv) {
   }
   progress.finish();
   const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // Apart from the peak of the whole run: the mesh, cloud and saved map below read the whole map
+  // at once (beyond MaxMemoryMB, which bounds the map while tracking).
+  const double tracking_rss_mb = peakResidentMiB();
 
   if (pipeline.config().loops.enabled) {
     // trajectory.txt is the final one: every pose where the optimised graph places its submap,
@@ -471,9 +481,7 @@ int run(int argc, char** argv) {
   // The submaps, their graph and place memory, as a second session takes them up.
   if (args.has("save-map")) st::io::writeMap(output.path("map.sdfmap"), pipeline.copySubmaps(), &pipeline.places());
 
-  struct rusage usage;
-  ::getrusage(RUSAGE_SELF, &usage);
-  const double peak_rss_mb = usage.ru_maxrss / 1024.0;  // Linux reports kilobytes
+  const double peak_rss_mb = peakResidentMiB();
 
   // A run fails when no frame was tracked against a map: one the first frame started, or a loaded
   // one (then the first frame is tracked in it too). A single frame starting a map is no failure.
@@ -534,8 +542,12 @@ int run(int argc, char** argv) {
   if (const st::MapMemoryBudget* budget = pipeline.memoryBudget()) {
     summary << " (MaxMemoryMB " << pipeline.config().max_map_memory_mb << "; " << budget->swap().size()
             << " blocks, " << budget->swap().bytesOnDisk() / 1048576.0 << " MiB, in the swap file at the end)";
+  } else if (const st::SubmapStore& closed = pipeline.closedSubmaps(); closed.swaps()) {
+    summary << " (MaxMemoryMB " << pipeline.config().max_map_memory_mb << "; " << closed.swappedCount() << " of "
+            << pipeline.submapCount() << " submaps, " << closed.bytesOnDisk() / 1048576.0
+            << " MiB, in the swap file at the end)";
   }
-  summary << ", peak resident " << peak_rss_mb << " MiB\n";
+  summary << ", peak resident " << peak_rss_mb << " MiB (" << tracking_rss_mb << " MiB while tracking)\n";
   if (swap_errors > 0) {
     summary << "swap file failed on " << swap_errors << " frame" << (swap_errors > 1 ? "s" : "")
             << ", blocks kept in memory (the map ended at " << pipeline.mapMemoryBytes() / 1048576.0
@@ -567,6 +579,7 @@ int run(int argc, char** argv) {
          << ", \"" << stages[i].first << "_p95\": " << jsonNumber(st::evaluation::percentile(*stages[i].second, 0.95));
   }
   json << "},\n  \"peak_rss_mb\": " << jsonNumber(peak_rss_mb)
+       << ",\n  \"peak_rss_tracking_mb\": " << jsonNumber(tracking_rss_mb)
        << ",\n  \"grid_mb\": " << jsonNumber(pipeline.mapMemoryBytes() / 1048576.0)
        << ",\n  \"submaps\": " << pipeline.submapCount() << ",\n  \"loops_closed\": " << pipeline.loopsClosed()
        << ",\n  \"loops_rejected\": " << pipeline.loopsRejected() << ",\n  \"loop_search\": {\"searched_frames\": "
@@ -576,7 +589,9 @@ int run(int argc, char** argv) {
        << ", \"ms_median\": " << jsonNumber(st::evaluation::percentile(optimise_ms, 0.5))
        << ", \"ms_max\": " << jsonNumber(st::evaluation::percentile(optimise_ms, 1.0)) << "}"
        << ",\n  \"swapped_mb\": "
-       << jsonNumber(pipeline.memoryBudget() ? pipeline.memoryBudget()->swap().bytesOnDisk() / 1048576.0 : 0.0)
+       << jsonNumber((pipeline.memoryBudget() ? pipeline.memoryBudget()->swap().bytesOnDisk()
+                                              : pipeline.closedSubmaps().bytesOnDisk()) /
+                     1048576.0)
        << ",\n  \"elapsed_s\": " << jsonNumber(elapsed_s)
        << ",\n  \"relocalisation\": {\"searched_frames\": " << search_ms.size() << ", \"found\": " << relocalisations
        << ", \"ms_median\": " << jsonNumber(st::evaluation::percentile(search_ms, 0.5))

@@ -443,16 +443,21 @@ TEST(Offline, ASavedMapIsLoadedByTheNextRunAndACorruptOneIsRefusedByName) {
 
 TEST(Offline, AMemoryBoundIsReportedAndRefusedWhereItCannotHold) {
   const std::string sequence = shortSequence(4);
-  const ToolRun bounded = offline("--sequence " + sequence + " --output " + test::scratchDirectory("bound") +
-                                  " --param MapType=sparse --param MaxMemoryMB=0.5");
-  EXPECT_EQ(bounded.exit_code, 0) << bounded.output;
-  EXPECT_NE(bounded.output.find("(MaxMemoryMB 0.50; 0 blocks"), std::string::npos) << bounded.output;
-  // Four frames of one view: every block is near the camera, none can go, and the user hears so once.
-  const std::string overrun = "warning: the map holds ";
-  const size_t warned_at = bounded.output.find(overrun);
-  ASSERT_NE(warned_at, std::string::npos) << bounded.output;
-  EXPECT_NE(bounded.output.find("above MaxMemoryMB=0.5", warned_at), std::string::npos) << bounded.output;
-  EXPECT_EQ(bounded.output.find(overrun, warned_at + 1), std::string::npos) << "warned more than once";
+  // One map swaps blocks, submaps (the default preset) whole submaps. Four frames of one view:
+  // every block is near the camera and the one submap is the active one, none can go, and the
+  // user hears so once.
+  for (const auto& [params, swapped] : {std::pair<std::string, std::string>{" --param SubmapSize=0", "0 blocks"},
+                                        {"", "0 of 1 submaps"}}) {
+    const ToolRun bounded = offline("--sequence " + sequence + " --output " + test::scratchDirectory("bound") +
+                                    " --param MapType=sparse --param MaxMemoryMB=0.5" + params);
+    EXPECT_EQ(bounded.exit_code, 0) << bounded.output;
+    EXPECT_NE(bounded.output.find("(MaxMemoryMB 0.50; " + swapped), std::string::npos) << bounded.output;
+    const std::string overrun = "warning: the map holds ";
+    const size_t warned_at = bounded.output.find(overrun);
+    ASSERT_NE(warned_at, std::string::npos) << bounded.output;
+    EXPECT_NE(bounded.output.find("above MaxMemoryMB=0.5", warned_at), std::string::npos) << bounded.output;
+    EXPECT_EQ(bounded.output.find(overrun, warned_at + 1), std::string::npos) << "warned more than once";
+  }
 
   expectRefused(sequence, "--param MapType=dense --param MaxMemoryMB=64", {"MaxMemoryMB=64 applies to MapType=sparse only"});
   expectRefused(sequence, "--param MapType=sparse --param MaxMemoryMB=64 --param SwapDirectory=/nonexistent/swap",

@@ -101,23 +101,27 @@ TEST(LoopClosure, ALoopHoldsNothingAlongADirectionItsFitLeftUnconstrained) {
 }
 
 /// An old submap (0) of the room mapped along the desk path, one after it (1) that saw nothing
-/// alike, and the active one (2), 5 m of path on: the camera back on the desk path.
+/// alike, and the active one (2), 5 m of path on: the camera back on the desk path. With
+/// `swapped_out`, submap 0 is in a swap file (as MaxMemoryMB leaves a submap far from the camera).
 struct DeskSubmaps {
   PipelineConfig config = preset("default").pipeline;
   PinholeCamera camera = test::testCamera();
   SdfPipeline mapping{config};
-  std::vector<Submap> closed;
+  SubmapStore closed;
   SubmapPlace active;
   std::vector<int> keyframe_submaps;
 
   static Eigen::Isometry3d desk(double t_s) { return synthetic::cameraPose(synthetic::Motion::kDesk, t_s, 10.0); }
 
-  DeskSubmaps() {
+  explicit DeskSubmaps(bool swapped_out = false)
+      : closed(swapped_out ? std::make_unique<BlockSwapFile>(test::scratchDirectory("desk_swap")) : nullptr) {
     for (double t = 0.0; t < 3.0; t += 1.0 / 6.0) mapping.processFrameAtPose(test::renderRoom(desk(t), camera), camera, desk(t), t);
-    closed.push_back(Submap{mapping.copyWholeMap(), SubmapPlace()});
-    closed.push_back(Submap{makeMap(config.volume), SubmapPlace()});
-    closed[1].place.node = 1;
-    closed[1].place.path_m = 1.0;
+    closed.add(Submap{mapping.copyWholeMap(), SubmapPlace()});
+    SubmapPlace after;
+    after.node = 1;
+    after.path_m = 1.0;
+    closed.add(Submap{makeMap(config.volume), after});
+    if (swapped_out) closed.swapOut(0);
     active.node = 2;
     active.path_m = 5.0;
     keyframe_submaps.assign(mapping.places().keyframes().size(), 0);
@@ -125,8 +129,10 @@ struct DeskSubmaps {
 };
 
 TEST(LoopDetector, SearchesAFrameInTheBackgroundAndReportsItAtALaterOne) {
-  // The graph (no correction yet) puts the camera where it is in submap 0.
-  const DeskSubmaps desks;
+  // The graph (no correction yet) puts the camera where it is in submap 0, which is in the swap
+  // file: the search reads it back on its own thread.
+  const DeskSubmaps desks(/*swapped_out=*/true);
+  ASSERT_TRUE(desks.closed.swapped(0));
   ASSERT_FALSE(desks.keyframe_submaps.empty());
 
   LoopClosureConfig loops;
@@ -163,6 +169,8 @@ TEST(LoopDetector, SearchesAFrameInTheBackgroundAndReportsItAtALaterOne) {
   EXPECT_LT(rotationAngle(error), 0.01);
   detector.reset();
   EXPECT_FALSE(detector.finish().searched) << "reset() ends the search, and drops its running step";
+  EXPECT_TRUE(desks.closed.swapped(0)) << "what the search read back was a copy; the submap stays in the file";
+  EXPECT_EQ(desks.closed.memoryBytes(), desks.closed.inMemory(1)->memoryBytes()) << "the search let go of its copy";
 }
 
 TEST(LoopDetector, RefusesAPlaceFurtherFromTheGraphsGuessThanTheDriftCanBe) {
@@ -172,7 +180,7 @@ TEST(LoopDetector, RefusesAPlaceFurtherFromTheGraphsGuessThanTheDriftCanBe) {
   for (const double max_drift_m : {0.5, 2.0}) {
     DeskSubmaps desks;
     ASSERT_FALSE(desks.keyframe_submaps.empty());
-    desks.closed[0].place.T_map_W.translation() = Eigen::Vector3d(1.0, 0.0, 0.0);
+    desks.closed.place(0).T_map_W.translation() = Eigen::Vector3d(1.0, 0.0, 0.0);
     LoopClosureConfig loops;
     loops.check_interval_frames = 1;
     loops.max_drift_m = max_drift_m;

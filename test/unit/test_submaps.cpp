@@ -265,7 +265,7 @@ TEST(Submaps, ANewSubmapStartsAlongThePathAndTracksAgainstTheOneBeforeFirst) {
     if (report.started_submap) {
       ++started;
       EXPECT_TRUE(report.fused) << "a submap starts with the frame that starts it";
-      EXPECT_GT((pipeline.activeSubmapAnchor().translation() - pipeline.closedSubmaps().back().place.T_W_anchor.translation())
+      EXPECT_GT((pipeline.activeSubmapAnchor().translation() - pipeline.closedSubmaps().newestPlace().T_W_anchor.translation())
                     .norm(),
                 0.1)
           << "frame " << i << " started a submap before the camera left the last";
@@ -278,7 +278,7 @@ TEST(Submaps, ANewSubmapStartsAlongThePathAndTracksAgainstTheOneBeforeFirst) {
             << " mm (one map: " << worst_one_map_m * 1e3 << " mm)\n";
   ASSERT_GE(started, 2) << "the desk path goes further than 0.2 m";
   EXPECT_EQ(pipeline.submapCount(), static_cast<size_t>(started) + 1);
-  EXPECT_EQ(pipeline.closedSubmaps().front().place.T_W_anchor.matrix(), Eigen::Matrix4d::Identity())
+  EXPECT_EQ(pipeline.closedSubmaps().place(0).T_W_anchor.matrix(), Eigen::Matrix4d::Identity())
       << "the first submap starts at the first frame";
   // The frame that starts a submap is tracked in the active one; the next kHandover - 1 in the
   // one it closed (unless the sequence ends first).
@@ -288,7 +288,9 @@ TEST(Submaps, ANewSubmapStartsAlongThePathAndTracksAgainstTheOneBeforeFirst) {
 
   // The whole map is every submap's measurements in one: weights add up, nothing is lost.
   double weight = test::totalWeight(pipeline.map());
-  for (const Submap& submap : pipeline.closedSubmaps()) weight += test::totalWeight(*submap.map);
+  for (int node = 0; node < static_cast<int>(pipeline.closedSubmaps().size()); ++node) {
+    weight += test::totalWeight(*pipeline.closedSubmaps().map(node));
+  }
   EXPECT_NEAR(test::totalWeight(*pipeline.copyWholeMap()), weight, 1e-6 * weight);
   EXPECT_GT(pipeline.mapMemoryBytes(), pipeline.map().memoryBytes());
 }
@@ -436,9 +438,7 @@ TEST(Submaps, ParametersRefuseWhatSubmapsCannotDoYetByName) {
   Settings swapping = preset("default");
   setParameterFromText(&swapping, "SubmapSize", "2");
   setParameterFromText(&swapping, "MaxMemoryMB", "64");
-  const std::vector<std::string> swap_errors = swapping.validate();
-  ASSERT_EQ(swap_errors.size(), 1u);
-  EXPECT_NE(swap_errors[0].find("SubmapSize=2 and MaxMemoryMB=64"), std::string::npos) << swap_errors[0];
+  EXPECT_TRUE(swapping.validate().empty()) << "submaps go to the swap file whole: " << swapping.validate()[0];
 
   Settings unused = preset("default");
   setParameterFromText(&unused, "SubmapSize", "0");
@@ -463,7 +463,7 @@ TEST(Submaps, TheDefaultPresetClosesLoopsWhereTheMapCanHoldSubmapsAndSaysWhereIt
   }
 
   Settings sparse = defaults;
-  EXPECT_FALSE(sparse.keepToOneMapWhereNeeded({"MapType"}, false).has_value());
+  EXPECT_FALSE(sparse.keepToOneMapWhereNeeded({"MapType"}, false, /*swaps_submaps=*/true).has_value());
   EXPECT_TRUE(sparse.pipeline.loops.enabled);
   EXPECT_TRUE(sparse.validate().empty());
 
@@ -471,7 +471,7 @@ TEST(Submaps, TheDefaultPresetClosesLoopsWhereTheMapCanHoldSubmapsAndSaysWhereIt
   // loops, said once, and the settings valid.
   Settings dense = defaults;
   setParameterFromText(&dense, "MapType", "dense");
-  const auto dense_note = dense.keepToOneMapWhereNeeded({"MapType"}, false);
+  const auto dense_note = dense.keepToOneMapWhereNeeded({"MapType"}, false, /*swaps_submaps=*/true);
   ASSERT_TRUE(dense_note.has_value());
   EXPECT_NE(dense_note->find("MapType=dense"), std::string::npos) << *dense_note;
   EXPECT_NE(dense_note->find("LoopClosure=false"), std::string::npos) << *dense_note;
@@ -479,26 +479,36 @@ TEST(Submaps, TheDefaultPresetClosesLoopsWhereTheMapCanHoldSubmapsAndSaysWhereIt
   EXPECT_FALSE(dense.pipeline.loops.enabled);
   EXPECT_TRUE(dense.validate().empty()) << dense.validate()[0];
 
+  // A memory bound: submaps where the caller swaps them whole (the offline runner), one map where
+  // it cannot (the node, whose publisher copies every submap).
   Settings swapping = defaults;
   setParameterFromText(&swapping, "MaxMemoryMB", "64");
-  const auto swap_note = swapping.keepToOneMapWhereNeeded({"MaxMemoryMB"}, false);
+  EXPECT_FALSE(swapping.keepToOneMapWhereNeeded({"MaxMemoryMB"}, false, /*swaps_submaps=*/true).has_value());
+  EXPECT_TRUE(swapping.pipeline.submaps.enabled());
+  EXPECT_TRUE(swapping.pipeline.loops.enabled);
+  EXPECT_TRUE(swapping.validate().empty());
+  Settings swapping_here = defaults;
+  setParameterFromText(&swapping_here, "MaxMemoryMB", "64");
+  const auto swap_note = swapping_here.keepToOneMapWhereNeeded({"MaxMemoryMB"}, false, /*swaps_submaps=*/false);
   ASSERT_TRUE(swap_note.has_value());
   EXPECT_NE(swap_note->find("MaxMemoryMB=64"), std::string::npos) << *swap_note;
-  EXPECT_TRUE(swapping.validate().empty());
+  EXPECT_FALSE(swapping_here.pipeline.submaps.enabled());
+  EXPECT_FALSE(swapping_here.pipeline.loops.enabled);
+  EXPECT_TRUE(swapping_here.validate().empty());
 
   Settings no_loops = defaults;
   setParameterFromText(&no_loops, "LoopClosure", "false");
-  const auto no_loops_note = no_loops.keepToOneMapWhereNeeded({"LoopClosure"}, false);
+  const auto no_loops_note = no_loops.keepToOneMapWhereNeeded({"LoopClosure"}, false, /*swaps_submaps=*/true);
   ASSERT_TRUE(no_loops_note.has_value()) << "submaps without loops only cost";
   EXPECT_NE(no_loops_note->find("LoopClosure=false"), std::string::npos) << *no_loops_note;
   EXPECT_FALSE(no_loops.pipeline.submaps.enabled());
   Settings submaps_alone = defaults;
   setParameterFromText(&submaps_alone, "LoopClosure", "false");
-  EXPECT_FALSE(submaps_alone.keepToOneMapWhereNeeded({"LoopClosure", "SubmapSize"}, false).has_value());
+  EXPECT_FALSE(submaps_alone.keepToOneMapWhereNeeded({"LoopClosure", "SubmapSize"}, false, /*swaps_submaps=*/true).has_value());
   EXPECT_TRUE(submaps_alone.pipeline.submaps.enabled()) << "submaps alone, when both are typed";
 
   Settings loading_grid = defaults;
-  const auto grid_note = loading_grid.keepToOneMapWhereNeeded({}, true);
+  const auto grid_note = loading_grid.keepToOneMapWhereNeeded({}, true, /*swaps_submaps=*/true);
   ASSERT_TRUE(grid_note.has_value());
   EXPECT_NE(grid_note->find(".vti"), std::string::npos) << *grid_note;
   EXPECT_FALSE(loading_grid.pipeline.submaps.enabled());
@@ -506,7 +516,7 @@ TEST(Submaps, TheDefaultPresetClosesLoopsWhereTheMapCanHoldSubmapsAndSaysWhereIt
   // What the user typed stands, and is refused by the parameter they typed.
   Settings typed_size = defaults;
   setParameterFromText(&typed_size, "MapType", "dense");
-  EXPECT_FALSE(typed_size.keepToOneMapWhereNeeded({"MapType", "SubmapSize"}, false).has_value());
+  EXPECT_FALSE(typed_size.keepToOneMapWhereNeeded({"MapType", "SubmapSize"}, false, /*swaps_submaps=*/true).has_value());
   ASSERT_EQ(typed_size.validate().size(), 1u);
   EXPECT_NE(typed_size.validate()[0].find("SubmapSize=1 applies to MapType=sparse only"), std::string::npos);
 
@@ -515,30 +525,150 @@ TEST(Submaps, TheDefaultPresetClosesLoopsWhereTheMapCanHoldSubmapsAndSaysWhereIt
   const auto refusalWithLoopsTyped = [&](const char* name, const char* value) {
     Settings typed = defaults;
     setParameterFromText(&typed, name, value);
-    EXPECT_TRUE(typed.keepToOneMapWhereNeeded({name, "LoopClosure"}, false).has_value()) << name << ": one map, said";
+    EXPECT_TRUE(typed.keepToOneMapWhereNeeded({name, "LoopClosure"}, false, /*swaps_submaps=*/true).has_value()) << name << ": one map, said";
     const std::vector<std::string> errors = typed.validate();
     return errors.size() == 1 ? errors[0] : std::to_string(errors.size()) + " errors, not one";
   };
   const std::string dense_refusal = refusalWithLoopsTyped("MapType", "dense");
   EXPECT_NE(dense_refusal.find("LoopClosure=true applies to MapType=sparse only"), std::string::npos) << dense_refusal;
-  const std::string swap_refusal = refusalWithLoopsTyped("MaxMemoryMB", "64");
-  EXPECT_NE(swap_refusal.find("LoopClosure=true and MaxMemoryMB=64"), std::string::npos) << swap_refusal;
 
   // One map typed: loop closure goes with the submaps, said once, unless it was typed too.
   Settings one_map = defaults;
   setParameterFromText(&one_map, "SubmapSize", "0");
-  const auto one_map_note = one_map.keepToOneMapWhereNeeded({"SubmapSize"}, false);
+  const auto one_map_note = one_map.keepToOneMapWhereNeeded({"SubmapSize"}, false, /*swaps_submaps=*/true);
   ASSERT_TRUE(one_map_note.has_value()) << "SubmapSize=0 alone asks for one map";
   EXPECT_NE(one_map_note->find("LoopClosure=false"), std::string::npos) << *one_map_note;
   EXPECT_FALSE(one_map.pipeline.loops.enabled);
   EXPECT_TRUE(one_map.validate().empty()) << one_map.validate()[0];
   Settings one_map_with_loops = defaults;
   setParameterFromText(&one_map_with_loops, "SubmapSize", "0");
-  EXPECT_FALSE(one_map_with_loops.keepToOneMapWhereNeeded({"SubmapSize", "LoopClosure"}, false).has_value());
+  EXPECT_FALSE(one_map_with_loops.keepToOneMapWhereNeeded({"SubmapSize", "LoopClosure"}, false, /*swaps_submaps=*/true).has_value());
   ASSERT_EQ(one_map_with_loops.validate().size(), 1u);
   EXPECT_NE(one_map_with_loops.validate()[0].find("LoopClosure=true needs SubmapSize > 0"), std::string::npos);
   Settings paper = preset("paper");
-  EXPECT_FALSE(paper.keepToOneMapWhereNeeded({}, false).has_value()) << "the paper's one map needs no note";
+  EXPECT_FALSE(paper.keepToOneMapWhereNeeded({}, false, /*swaps_submaps=*/true).has_value()) << "the paper's one map needs no note";
+}
+
+/// Whether two sparse maps hold the same blocks, voxel for voxel and colour for colour.
+::testing::AssertionResult sameBlocks(const TsdfMap& a_map, const TsdfMap& b_map) {
+  const auto& a = static_cast<const SparseTsdfMap&>(a_map);
+  const auto& b = static_cast<const SparseTsdfMap&>(b_map);
+  if (a.blockIndices() != b.blockIndices()) return ::testing::AssertionFailure() << "different blocks";
+  if (a.holdsColour() != b.holdsColour()) return ::testing::AssertionFailure() << "colour held by one only";
+  for (const SparseTsdfMap::BlockIndex& index : a.blockIndices()) {
+    const VoxelBlock& x = *a.find(index);
+    const VoxelBlock& y = *b.find(index);
+    for (int v = 0; v < kBlockVoxels; ++v) {
+      if (x.voxels[v].distance_m != y.voxels[v].distance_m || x.voxels[v].weight != y.voxels[v].weight) {
+        return ::testing::AssertionFailure() << "block " << index.transpose() << " voxel " << v << " differs";
+      }
+    }
+    if (x.colours != y.colours) return ::testing::AssertionFailure() << "block " << index.transpose() << ": colours";
+  }
+  return ::testing::AssertionSuccess();
+}
+
+TEST(SubmapStore, ASubmapSwappedOutComesBackVoxelForVoxelWhileSomeoneHoldsIt) {
+  const PinholeCamera camera = test::testCamera().scaledTo(160, 120);
+  const PipelineConfig config = submapPipeline(0.0, 0);
+  // Three submaps of the desk path's first, middle and last frames; the first holds colour.
+  SubmapStore store(std::make_unique<BlockSwapFile>(test::scratchDirectory("submap_store")));
+  std::vector<std::unique_ptr<TsdfMap>> originals;
+  for (int n = 0; n < 3; ++n) {
+    auto map = std::make_unique<SparseTsdfMap>(config.volume);
+    Integrator(config.integrator).integrate(deskFrame(20 * n, camera), camera, deskPose(20 * n), map.get());
+    if (n == 0) {
+      map->enableColour();
+      map->forEachBlock([](const SparseTsdfMap::BlockIndex&, VoxelBlock& block) { block.colours[7] = {200, 10, 30, 3}; });
+    }
+    originals.push_back(map->clone());
+    SubmapPlace place;
+    place.node = n;
+    store.add(Submap{std::move(map), place});
+  }
+  const size_t all_bytes = store.memoryBytes();
+  const size_t first_bytes = originals[0]->memoryBytes();
+  const Eigen::AlignedBox3f first_box = store.mappedBox(0);
+
+  store.swapOut(0);
+  EXPECT_TRUE(store.swapped(0));
+  EXPECT_EQ(store.inMemory(0), nullptr);
+  EXPECT_EQ(store.swappedCount(), 1);
+  EXPECT_EQ(store.memoryBytes(), all_bytes - first_bytes);
+  EXPECT_GT(store.bytesOnDisk(), 0u);
+  EXPECT_TRUE(store.mappedBox(0).isApprox(first_box)) << "its box is kept (a relocalisation guess is checked by it)";
+  {
+    const std::shared_ptr<const TsdfMap> back = store.map(0);
+    EXPECT_TRUE(sameBlocks(*back, *originals[0]));
+    EXPECT_EQ(store.map(0).get(), back.get()) << "read once while held: readers share it";
+    EXPECT_EQ(store.memoryBytes(), all_bytes) << "the copy held counts";
+    EXPECT_TRUE(store.swapped(0)) << "the submap stays in the file";
+  }
+  EXPECT_EQ(store.memoryBytes(), all_bytes - first_bytes) << "let go: freed";
+  EXPECT_TRUE(sameBlocks(*store.map(1), *originals[1])) << "one in memory is handed as it is";
+
+  store.swapOut(0);  // swapped already: nothing
+  EXPECT_THROW(store.swapOut(2), std::logic_error) << "the newest may still be fused into";
+  EXPECT_THROW(store.map(3), std::out_of_range);
+  SubmapStore without_file;
+  auto map = std::make_unique<SparseTsdfMap>(config.volume);
+  without_file.add(Submap{std::move(map), SubmapPlace()});
+  without_file.add(Submap{std::make_unique<SparseTsdfMap>(config.volume), SubmapPlace()});
+  EXPECT_THROW(without_file.swapOut(0), std::logic_error);
+
+  store.clear();
+  EXPECT_TRUE(store.empty());
+  EXPECT_EQ(store.bytesOnDisk(), 0u);
+}
+
+TEST(Submaps, AMemoryBoundSwapsWholeClosedSubmapsWithoutChangingThePathOrTheMap) {
+  // Without recent submaps merged in the background or loops, a run is the same every time: with
+  // a bound that holds about a third of the submaps, every pose and the whole map (the swapped
+  // submaps read back) are those of the run without one, and the map stays within the bound.
+  constexpr int kFrames = 60;
+  const PinholeCamera camera = test::testCamera().scaledTo(160, 120);
+  PipelineConfig config = submapPipeline(0.05, 3);
+  SdfPipeline unbounded(config);
+  std::vector<DepthImage> frames;
+  std::vector<Eigen::Isometry3d> poses;
+  size_t peak_bytes = 0;
+  for (int i = 0; i < kFrames; ++i) {
+    frames.push_back(deskFrame(i, camera));
+    ASSERT_TRUE(unbounded.processFrame(frames.back(), camera, i * kFramePeriod_s).track.ok()) << i;
+    poses.push_back(unbounded.pose());
+    peak_bytes = std::max(peak_bytes, unbounded.mapMemoryBytes());
+  }
+  ASSERT_GE(unbounded.submapCount(), 6u);
+  config.max_map_memory_mb = 0.4 * peak_bytes / 1048576.0;
+  config.swap_directory = test::scratchDirectory("submap_budget");
+  SdfPipeline bounded(config);
+  int swapped_out = 0, notices = 0;
+  bool was_over = false;
+  for (int i = 0; i < kFrames; ++i) {
+    const FrameReport report = bounded.processFrame(frames[i], camera, i * kFramePeriod_s);
+    ASSERT_TRUE(report.track.ok()) << i;
+    ASSERT_TRUE(report.swap_error.empty()) << report.swap_error;
+    ASSERT_TRUE(bounded.pose().isApprox(poses[i], 1e-12)) << "frame " << i << " moved by the bound";
+    swapped_out += report.submaps_swapped_out;
+    notices += !report.swap_notice.empty();
+    // Over the bound after swapping (the active and newest submaps alone need more): said once.
+    const bool over = bounded.mapMemoryBytes() > config.max_map_memory_mb * 1048576.0;
+    EXPECT_EQ(!report.swap_warning.empty(), over && !was_over) << "frame " << i << ": " << report.swap_warning;
+    was_over = over;
+  }
+  std::cout << "[ figures  ] " << bounded.submapCount() << " submaps, " << bounded.closedSubmaps().swappedCount()
+            << " in the swap file; map " << bounded.mapMemoryBytes() / 1048576.0 << " MiB under "
+            << config.max_map_memory_mb << " MiB (unbounded peak " << peak_bytes / 1048576.0 << " MiB)\n";
+  EXPECT_GT(swapped_out, 0);
+  EXPECT_EQ(notices, 1) << "the user is told once that submaps go to the swap file";
+  EXPECT_LE(bounded.mapMemoryBytes(), config.max_map_memory_mb * 1048576.0);
+  EXPECT_GE(bounded.closedSubmaps().swappedCount(), 2);
+  EXPECT_TRUE(sameBlocks(*bounded.copyWholeMap(), *unbounded.copyWholeMap()));
+  const SubmapGraph saved = bounded.copySubmaps();
+  ASSERT_EQ(saved.submaps.size(), bounded.submapCount());
+  for (int node = 0; node + 1 < static_cast<int>(saved.submaps.size()); ++node) {
+    EXPECT_TRUE(sameBlocks(*saved.submaps[node].map, *unbounded.closedSubmaps().map(node))) << "submap " << node;
+  }
 }
 
 }  // namespace

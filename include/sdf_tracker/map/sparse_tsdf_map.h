@@ -305,6 +305,8 @@ class SparseTsdfMap::RegionReader final : public FieldSampler {
   std::vector<const VoxelBlock*> cells_;
 };
 
+/// The box that holds every voxel the map may have observed: a sparse map's blocks, a dense grid.
+Eigen::AlignedBox3f mappedBox(const TsdfMap& map);
 /// The map as a dense grid: a copy of a dense one; the box around every block of a sparse one.
 TsdfVolume toDenseVolume(const TsdfMap& map);
 /// The lattice voxels of the map inside region_W (world frame, metres; a dense grid's clipped to

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <future>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -10,6 +11,7 @@
 #include "sdf_tracker/camera/camera.h"
 #include "sdf_tracker/camera/depth_image.h"
 #include "sdf_tracker/graph/pose_graph.h"
+#include "sdf_tracker/pipeline/submap_store.h"
 #include "sdf_tracker/pipeline/submaps.h"
 #include "sdf_tracker/places/place_memory.h"
 #include "sdf_tracker/relocalisation/relocaliser.h"
@@ -126,10 +128,11 @@ class LoopDetector {
   /// `places`: every keyframe, `keyframe_submaps[k]` the submap keyframe k was taken in (its pose
   /// is in that submap's frame). Returns the search step that finished since the last call, if
   /// any (it looked at an earlier frame); when the search thread is free, hands it this frame
-  /// (a copy), if a search runs or one is due. Never waits. The closed submaps' maps must stay as
-  /// they are, and in place, until reset() (only the newest may still be fused into).
+  /// (a copy), if a search runs or one is due. Never waits. A search holds the map of the submap
+  /// it searches (read back on its thread when it is in the swap file), which must not change
+  /// meanwhile (only the newest may still be fused into); `closed` must last until reset().
   Step step(const DepthImage& depth, const PinholeCamera& camera, const Eigen::Isometry3d& T_W_C,
-            const SubmapPlace& active, const std::vector<Submap>& closed, const PlaceMemory& places,
+            const SubmapPlace& active, const SubmapStore& closed, const PlaceMemory& places,
             const std::vector<int>& keyframe_submaps);
   /// Waits for the search step running, if any, and returns it (what a run's end must see).
   Step finish();
@@ -142,18 +145,24 @@ class LoopDetector {
   /// A loop to `submap` from the active one was closed: it is not searched for again while the
   /// active submap stays the same.
   void joined(int submap) { joined_.push_back(submap); }
+  /// The submap a search runs in (-1: none).
+  int searchedSubmap() const { return search_submap_; }
 
  private:
   /// The old submap to search, if any keyframe of one is near the camera and alike.
   std::optional<int> candidate(const DepthImage& depth, const Eigen::Isometry3d& T_map_C, const SubmapPlace& active,
-                               const std::vector<Submap>& closed, const PlaceMemory& places,
+                               const SubmapStore& closed, const PlaceMemory& places,
                                const std::vector<int>& keyframe_submaps) const;
   /// What the search thread is given: a frame, and where the graph puts it in the searched submap.
   struct Job {
     DepthImage depth;
     PinholeCamera camera;
-    const TsdfMap* map = nullptr;  ///< the searched submap's
-    bool begins = false;           ///< the search's first frame: its field is built first
+    /// The searched submap's map; at the search's first frame, none yet: the search thread reads
+    /// it from `closed` (from the swap file when it is there).
+    std::shared_ptr<const TsdfMap> map;
+    const SubmapStore* closed = nullptr;
+    int submap = -1;
+    bool begins = false;  ///< the search's first frame: its field is built first
     Eigen::Isometry3d guess = Eigen::Isometry3d::Identity();   ///< T_S_C by the graph
     Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();  ///< tracked, since its last frame
     Eigen::Isometry3d T_W_C = Eigen::Isometry3d::Identity();
@@ -162,7 +171,9 @@ class LoopDetector {
   struct Outcome {
     Job job;  ///< its depth released
     Relocaliser::Step found;
-    bool no_surface = false;  ///< the submap holds no surface: nothing to find there
+    /// Nothing to find there: the submap holds no surface, or could not be read back (why).
+    bool no_surface = false;
+    std::string read_error;
     double ms = 0.0;
   };
   /// The search thread's work on one frame.
@@ -177,6 +188,8 @@ class LoopDetector {
   PlaceMemory search_places_;
   std::future<Outcome> running_;
   int search_submap_ = -1;
+  /// The searched submap's map while the search goes on.
+  std::shared_ptr<const TsdfMap> search_map_;
   int search_frames_ = 0;
   /// The pose of the last frame handed to the search (its motion to the next one).
   Eigen::Isometry3d last_search_T_W_C_ = Eigen::Isometry3d::Identity();

@@ -21,6 +21,7 @@
 #include "sdf_tracker/map/sparse_tsdf_map.h"
 #include "sdf_tracker/map/tsdf_map.h"
 #include "sdf_tracker/pipeline/loop_closure.h"
+#include "sdf_tracker/pipeline/submap_store.h"
 #include "sdf_tracker/pipeline/submaps.h"
 #include "sdf_tracker/places/place_memory.h"
 #include "sdf_tracker/relocalisation/relocaliser.h"
@@ -65,8 +66,12 @@ struct PipelineConfig {
   /// motion it measures between two frames, as a fraction of the distance and of the angle
   /// travelled (wheels: a few per cent), no less than kMinOdometrySigma_m / _rad per frame.
   double odometry_error = 0.05;
-  /// Sparse map only: above this many MiB, blocks away from the camera are swapped to disk (see
-  /// MapMemoryBudget); 0 never.
+  /// Sparse map only: above this many MiB, the map's memory is bounded by a swap file on disk; 0
+  /// never. One map: blocks away from the camera go to it (MapMemoryBudget), and come back when
+  /// seen again. Submaps: whole closed submaps far from the camera go to it (never the active one,
+  /// the newest closed one, or one a loop search reads; the recent ones once their merge for
+  /// tracking holds them), and are read back while a loop search, a merge, a save or a whole mesh
+  /// needs them.
   double max_map_memory_mb = 0.0;
   /// Where the swap file is made; empty: the system's temporary directory.
   std::string swap_directory;
@@ -77,7 +82,7 @@ struct PipelineConfig {
   bool relocalise = false;
   PlaceMemoryConfig places;
   RelocaliserConfig relocaliser;
-  /// The map as a sequence of submaps along the path (sparse map only, no memory budget); off by
+  /// The map as a sequence of submaps along the path (sparse map only); off by
   /// default: one map.
   SubmapConfig submaps;
   /// Loops between submaps, and the pose graph that places them (needs submaps); off by default.
@@ -167,9 +172,11 @@ struct FrameReport {
   double tracking_ms = 0.0;
   double fusion_ms = 0.0;
   /// Blocks read back from the swap file before tracking, and written to it after fusion
-  /// (MaxMemoryMB).
+  /// (MaxMemoryMB, one map).
   size_t blocks_swapped_in = 0;
   size_t blocks_swapped_out = 0;
+  /// Closed submaps written to the swap file as this frame started a submap (MaxMemoryMB).
+  int submaps_swapped_out = 0;
   /// Set on the frame at which swapping starts: what to tell the user, once.
   std::string swap_notice;
   /// Set on the frame at which the map stays above MaxMemoryMB after swapping, once until it is
@@ -247,8 +254,9 @@ class SdfPipeline {
     if ((!budget_ || budget_->swap().size() == 0) && closed_submaps_.empty()) return fn(*map_);
     fn(*copyWholeMap());
   }
-  /// The submaps before the active one, oldest first (none without submaps).
-  const std::vector<Submap>& closedSubmaps() const { return closed_submaps_; }
+  /// The submaps before the active one, oldest first (none without submaps), with a memory budget
+  /// some in the swap file.
+  const SubmapStore& closedSubmaps() const { return closed_submaps_; }
   /// The submaps, the active one included (1 without submaps).
   size_t submapCount() const { return closed_submaps_.size() + 1; }
   /// Bytes the map's voxels hold in memory, every submap's (and a search's copy of them all, and
@@ -360,6 +368,10 @@ class SdfPipeline {
   /// With a memory budget: reads back the swapped blocks near the view from T_W_C up to
   /// furthest_m (what tracking or fusion there may touch), counted in the report.
   void restoreNear(const Eigen::Isometry3d& T_W_C, const PinholeCamera& camera, float furthest_m, FrameReport* report);
+  /// With submaps and a memory budget, while the map is over the budget: swaps out closed
+  /// submaps, farthest from the camera first, but not the newest, nor one searched for a loop,
+  /// nor the recent ones until their merge for tracking has landed (which holds them then).
+  void swapOutSubmaps(FrameReport* report);
   /// With a memory budget and the map over it: swaps out blocks away from that view.
   void evictAwayFrom(const Eigen::Isometry3d& T_W_C, const PinholeCamera& camera, float furthest_m,
                      FrameReport* report);
@@ -396,6 +408,9 @@ class SdfPipeline {
   /// Frees them (waiting for a merge still running): frames are tracked against the active submap
   /// alone (or a handover's map).
   void dropRecentSubmaps();
+  /// Whether closed submap `node` is one of the recent ones (SubmapConfig::track_recent_m): the
+  /// camera left it within that much path before the active one started.
+  bool isRecent(int node) const;
   /// Whether a graph solution moved any merged recent submap against the active one by more than a
   /// tenth of a voxel (within the camera's reach): then they are merged again.
   bool recentSubmapsMoved() const;
@@ -458,7 +473,12 @@ class SdfPipeline {
   /// The whole map while a search runs in a map of several submaps, and after it found the
   /// camera until the new submap's handover ends.
   std::unique_ptr<TsdfMap> search_map_;
-  std::vector<Submap> closed_submaps_;
+  SubmapStore closed_submaps_;
+  /// With submaps and a memory budget: the budget [bytes], and whether the user was told that
+  /// submaps go to the swap file, and that the map stays over the budget (until it is back within).
+  size_t submap_budget_bytes_ = 0;
+  bool told_of_submap_swap_ = false;
+  bool submaps_over_budget_ = false;
   /// With SubmapConfig::track_recent_m: the submaps the camera left within that path, merged in
   /// the active one's frame when it started (and again when a graph solution moves them against
   /// it), and the overlay of them on the active submap that frames are tracked against (until the
@@ -470,10 +490,13 @@ class SdfPipeline {
   /// A merge of the recent submaps running in the background (it reads closed submaps: declared
   /// after them, so that it ends before they go).
   struct RecentMerge {
-    std::unique_ptr<SparseTsdfMap> map;
+    std::unique_ptr<SparseTsdfMap> map;  ///< none when a submap could not be read back
     RecentPlacements placements;
+    std::string error;
   };
   std::future<RecentMerge> recent_merge_;
+  /// Why the last merge failed, until a frame's report says it.
+  std::string recent_merge_error_;
   /// Where the active submap (map_) lies.
   SubmapPlace active_;
   /// The keyframes while a search runs in the merged submaps, at their places in the map frame.
