@@ -77,7 +77,7 @@ set(SDF_TRACKER_UNIT_TEST_LIBRARIES sdf_tracker_pipeline sdf_tracker_graph sdf_t
 set(SDF_TRACKER_SEQUENCE_TEST_SOURCES ${SDF_TRACKER_TEST_DIR}/support/test_main.cpp
   ${SDF_TRACKER_TEST_DIR}/sequences/test_end_to_end.cpp ${SDF_TRACKER_TEST_DIR}/sequences/test_map_sequences.cpp
   ${SDF_TRACKER_TEST_DIR}/sequences/test_relocalisation_runs.cpp
-  ${SDF_TRACKER_TEST_DIR}/sequences/test_odometry_prior.cpp)
+  ${SDF_TRACKER_TEST_DIR}/sequences/test_odometry_prior.cpp ${SDF_TRACKER_TEST_DIR}/sequences/test_loop_closure_runs.cpp)
 # The command-line tools' tests: their libraries, and the programs run as a user runs them.
 set(SDF_TRACKER_TOOLS_TEST_SOURCES ${SDF_TRACKER_TEST_DIR}/support/test_main.cpp
   ${SDF_TRACKER_TEST_DIR}/tools/test_tools.cpp ${SDF_TRACKER_TEST_DIR}/tools/test_devices.cpp)
