@@ -362,7 +362,7 @@ std::vector<ParameterSpec> buildTable() {
   t.push_back(bound<double>("SubmapSize", "m",
                             "sparse map: the map as submaps along the path (what loop closure moves), a new one once "
                             "the camera is this far from where the active one started; 0 one map (the default preset's "
-                            "1 m holds for a sparse map; the node keeps to one map under MaxMemoryMB)",
+                            "1 m holds for a sparse map)",
                             closed(0.0, 1e4), {1.0, 0.0, 0.0}, kAtStart, kAll,
                             [](auto& s) -> auto& { return s.pipeline.submaps.max_distance_m; }));
   t.push_back(bound<double>("SubmapTurn", "deg",
@@ -495,7 +495,7 @@ std::vector<std::string> Settings::validate() const {
 }
 
 std::optional<std::string> Settings::keepToOneMapWhereNeeded(const std::vector<std::string>& given,
-                                                             bool loads_dense_map, bool swaps_submaps) {
+                                                             bool loads_dense_map) {
   if (!pipeline.submaps.enabled()) {
     // One map typed (SubmapSize=0): loop closure, which moves submaps, goes too unless typed.
     if (!pipeline.loops.enabled || isGiven(given, "LoopClosure")) return std::nullopt;
@@ -506,7 +506,6 @@ std::optional<std::string> Settings::keepToOneMapWhereNeeded(const std::vector<s
   std::string why;
   if (!pipeline.loops.enabled && isGiven(given, "LoopClosure")) why = "LoopClosure=false, and submaps serve loop closure";
   else if (pipeline.volume.type == MapType::kDense) why = "MapType=dense holds no submaps";
-  else if (pipeline.max_map_memory_mb > 0.0 && !swaps_submaps) why = "swapping (MaxMemoryMB=" + toText(pipeline.max_map_memory_mb) + ") keeps to one map here";
   else if (loads_dense_map) why = "the map loaded is a dense grid (.vti), which holds no submaps";
   if (why.empty()) return std::nullopt;
   std::string note = "one map, no submaps (SubmapSize=0): " + why;

@@ -167,9 +167,13 @@ visualization_msgs::Marker MapPublisher::chunkMarker(const st::TriangleMesh& mes
 
 bool MapPublisher::updateParts() {
   std::vector<Eigen::Isometry3d> placements;
+  std::vector<bool> swapped;
   {
     std::lock_guard<std::mutex> lock(map_mutex_);
-    for (const LiveMapPart& part : live_()) placements.push_back(part.T_W_part);
+    for (const LiveMapPart& part : live_()) {
+      placements.push_back(part.T_W_part);
+      swapped.push_back(part.swapped);
+    }
   }
   // Parts the map no longer has (a reset, another map loaded): the viewer starts over.
   if (parts_.size() > placements.size()) {
@@ -186,9 +190,18 @@ bool MapPublisher::updateParts() {
     parts_.push_back(std::move(part));
   }
   for (size_t i = 0; i < parts_.size(); ++i) {
-    parts_[i].T_W_part = placements[i];
-    parts_[i].copy = parts_[i].snapshot->update();
-    if (!parts_[i].copy) return false;  // the map changed since the parts were counted: next time
+    Part& part = parts_[i];
+    part.T_W_part = placements[i];
+    if (swapped[i] || part.swapped) {
+      // Its chunks as sent stay; its copy and mesher's state go (a swapped submap never changes).
+      part.swapped = true;
+      part.snapshot.reset();
+      part.copy = nullptr;
+      part.mesher = st::ChunkedMesher();
+      continue;
+    }
+    part.copy = part.snapshot->update();
+    if (!part.copy) return false;  // the map changed since the parts were counted: next time
   }
   return !parts_.empty();
 }
@@ -200,14 +213,19 @@ const st::TsdfMap& MapPublisher::wholeMap() {
   std::vector<st::GrowingMerge::Part> closed;
   for (size_t i = 0; i + 1 < parts_.size(); ++i) {
     const Part& part = parts_[i];
+    if (part.swapped) continue;
     closed.push_back({{&static_cast<const st::SparseTsdfMap&>(*part.copy), part.T_W_part}, part.copy->identity(),
                       part.snapshot->syncedRevision()});
   }
-  const st::SparseTsdfMap& closed_merged = closed_merge_.update(closed);
   const Part& active = parts_.back();
-  merged_ = std::make_unique<st::SparseTsdfMap>(st::mergeMaps(
-      {{&closed_merged, Eigen::Isometry3d::Identity()},
-       {&static_cast<const st::SparseTsdfMap&>(*active.copy), active.T_W_part}}));
+  const st::PlacedMap active_placed{&static_cast<const st::SparseTsdfMap&>(*active.copy), active.T_W_part};
+  if (closed.empty()) {
+    merged_ = std::make_unique<st::SparseTsdfMap>(st::mergeMaps({active_placed}));
+    return *merged_;
+  }
+  const st::SparseTsdfMap& closed_merged = closed_merge_.update(closed);
+  merged_ = std::make_unique<st::SparseTsdfMap>(
+      st::mergeMaps({{&closed_merged, Eigen::Isometry3d::Identity()}, active_placed}));
   return *merged_;
 }
 
@@ -219,8 +237,18 @@ void MapPublisher::publishMeshBlocks(const std_msgs::Header& header, const Eigen
     clear.ns = "mesh_blocks";
     clear.action = visualization_msgs::Marker::DELETEALL;
     array.markers.push_back(clear);
-    for (Part& part : parts_) part.chunks.clear();
-    next_marker_id_ = 1;
+    // A swapped part cannot be meshed again: its chunks as sent go out again (as if it moved),
+    // under the ids they have, which new ones must not take.
+    bool kept = false;
+    for (Part& part : parts_) {
+      if (part.swapped) {
+        part.shown_T_map_part.matrix().setZero();
+        kept = kept || !part.chunks.empty();
+      } else {
+        part.chunks.clear();
+      }
+    }
+    if (!kept) next_marker_id_ = 1;
   };
   const bool resend = resend_mesh_blocks_.exchange(false);
   if (parts_.size() == 1 && parts_.front().copy->type() == st::MapType::kDense) {
@@ -242,6 +270,7 @@ void MapPublisher::publishMeshBlocks(const std_msgs::Header& header, const Eigen
     bool restarted = false;
     for (size_t i = 0; i < parts_.size(); ++i) {
       Part& part = parts_[i];
+      if (part.swapped) continue;  // its chunks as sent
       const auto& sparse = static_cast<const st::SparseTsdfMap&>(*part.copy);
       // Chunks meshed before the map held colour were sent grey: the first update with colour
       // sends every chunk again, in colour, not only those that changed.

@@ -249,7 +249,7 @@ bool MapServices::loadVolume(sdf_tracker::SavePath::Request& req, sdf_tracker::S
     st::Settings settings{state_.pipeline->config(), st::CameraSettings()};
     const bool grid = loaded.submaps.submaps.front().map->type() == st::MapType::kDense;
     const std::optional<std::string> one_map =
-        grid ? settings.keepToOneMapWhereNeeded(options_.given_parameters, true, /*swaps_submaps=*/false) : std::nullopt;
+        grid ? settings.keepToOneMapWhereNeeded(options_.given_parameters, true) : std::nullopt;
     state_.pipeline->setSubmaps(std::move(loaded.submaps), std::move(loaded.places), one_map.has_value());
     state_.path.clear();
     state_.restarted = true;

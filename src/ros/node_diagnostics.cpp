@@ -42,6 +42,8 @@ void NodeDiagnostics::loopClosure(diagnostic_updater::DiagnosticStatusWrapper& s
     return;
   }
   stat.add("active submap", last_.submap);
+  stat.add("map memory [MiB]", last_.map_memory_mb);
+  stat.add("submaps in the swap file", last_.submaps_swapped);
   stat.add("loops kept", last_.loops_closed);
   stat.add("loops found wrong", last_.loops_rejected);
   if (last_solution_) {

@@ -173,20 +173,8 @@ void readParameters(const ros::NodeHandle& pnh, st::Settings* settings, NodeOpti
       "~tum_camera (" + options->tum_camera + ") and FocalLength/CenterPoint both give the intrinsics: set one");
   for (const auto& entry : given) options->given_parameters.push_back(entry.first);
   const bool loads_dense_map = st::io::readsAsDenseGrid(options->load_volume);
-  // The map publisher keeps a copy of every submap, which no swap file bounds: the node keeps to
-  // one map under MaxMemoryMB.
-  if (const auto note = settings->keepToOneMapWhereNeeded(options->given_parameters, loads_dense_map,
-                                                          /*swaps_submaps=*/false)) {
+  if (const auto note = settings->keepToOneMapWhereNeeded(options->given_parameters, loads_dense_map)) {
     notes->push_back(*note);
-  }
-  const st::PipelineConfig& p = settings->pipeline;
-  if (p.max_map_memory_mb > 0.0 && (p.submaps.enabled() || p.loops.enabled)) {
-    errors.require(false, "MaxMemoryMB=" + st::toText(p.max_map_memory_mb) + " cannot be used with " +
-                              (p.submaps.enabled() ? "SubmapSize=" + st::toText(p.submaps.max_distance_m)
-                                                   : std::string("LoopClosure=true")) +
-                              " in the node yet: its map publisher keeps a copy of every submap, which the swap "
-                              "file would not bound (set SubmapSize=0 and LoopClosure=false, or MaxMemoryMB=0; "
-                              "sdf_tracker_offline swaps whole submaps)");
   }
   if (errors.list().empty()) errors.merge("", settings->validate());
   st::throwIfInvalid("parameters of " + pnh.getNamespace(), errors.list());

@@ -97,7 +97,7 @@ TrackerServer::TrackerServer(ros::NodeHandle nh, ros::NodeHandle pnh) : nh_(nh),
         std::vector<LiveMapPart> parts;
         const st::SubmapStore& closed = pipeline.closedSubmaps();
         for (int node = 0; node < static_cast<int>(closed.size()); ++node) {
-          parts.push_back({closed.inMemory(node), closed.place(node).T_map_W});  // (the node swaps none)
+          parts.push_back({closed.inMemory(node), closed.place(node).T_map_W, closed.swapped(node)});
         }
         parts.push_back({&pipeline.map(), pipeline.submapPlace(static_cast<int>(pipeline.submapCount()) - 1).T_map_W});
         return parts;
@@ -425,6 +425,8 @@ void TrackerServer::process(const Frame& frame) {
       state_.path.add(image.header.stamp.toSec(), report.submap, T_active_C, T_W_C);
     }
     status.submap = static_cast<uint32_t>(report.submap);
+    status.map_memory_mb = state_.pipeline->mapMemoryBytes() / 1048576.0;
+    status.submaps_swapped = static_cast<uint32_t>(state_.pipeline->closedSubmaps().swappedCount());
     status.loops_closed = static_cast<uint32_t>(state_.pipeline->loopsClosed());
     status.loops_rejected = static_cast<uint32_t>(state_.pipeline->loopsRejected());
     if (report.loop.solved) moved_path_W = state_.path.placed(*state_.pipeline);

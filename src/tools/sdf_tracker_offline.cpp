@@ -157,7 +157,7 @@ int run(int argc, char** argv) {
     return 0;
   }
   const bool loads_dense_map = st::io::readsAsDenseGrid(args.get("load-volume", ""));
-  if (const auto note = settings.keepToOneMapWhereNeeded(given, loads_dense_map, /*swaps_submaps=*/true)) std::cout << "note: " << *note << "\n";
+  if (const auto note = settings.keepToOneMapWhereNeeded(given, loads_dense_map)) std::cout << "note: " << *note << "\n";
   st::throwIfInvalid("parameters", settings.validate());
   for (const std::string& note : settings.withoutEffect(given)) std::cerr << "warning: --param " << note << "\n";
 #ifdef _OPENMP

@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <geometry_msgs/TransformStamped.h>
@@ -124,6 +126,17 @@ TEST_F(NodeLoopTest, ALoopClosedMovesTfThePathAndTheMeshAndTheDiagnosticsSaySo) 
   }
   ASSERT_GE(solved, 1) << "no pose graph solution landed in " << kCircleFrames << " frames";
   const sdf_tracker::TrackingStatus& status = statuses[solved];
+  double most_mb = 0.0;
+  int most_at = 0;
+  for (int i = 0; i < kCircleFrames; ++i) {
+    if (statuses[i].map_memory_mb > most_mb) most_mb = statuses[most_at = i].map_memory_mb;
+  }
+  std::cout << "[ figures  ] MaxMemoryMB 10: map at most " << most_mb << " MiB (frame " << most_at << ", "
+            << statuses[most_at].submaps_swapped << " swapped, " << statuses[most_at].submap << " active; "
+            << statuses[most_at + 1].map_memory_mb << " MiB after it); " << status.submaps_swapped
+            << " submaps in the swap file when the loop's solution landed, " << statuses.back().submaps_swapped
+            << " at the end (of " << statuses.back().submap + 1 << ")\n";
+  EXPECT_GT(status.submaps_swapped, 0u) << "node_loop.test's bound sends no submap to the swap file";
   EXPECT_GE(status.loops_closed, 1u);
   EXPECT_EQ(status.loops_rejected, 0u) << "a right loop was found wrong";
   EXPECT_GT(status.submap, 2u);

@@ -54,7 +54,7 @@ TEST(Parameters, RulesBetweenParametersAreReportedInTheUsersWords) {
   setParameter(&compact, "MapType", std::string("dense"));
   setParameter(&compact, "CompactVoxels", true);
   setParameter(&compact, "MaxWeight", 300.0);
-  ASSERT_TRUE(compact.keepToOneMapWhereNeeded({"MapType", "CompactVoxels", "MaxWeight"}, false, /*swaps_submaps=*/true));
+  ASSERT_TRUE(compact.keepToOneMapWhereNeeded({"MapType", "CompactVoxels", "MaxWeight"}, false));
   ASSERT_EQ(compact.validate().size(), 1u);
   EXPECT_EQ(compact.validate()[0], "MaxWeight must be at most 255.99609375 with CompactVoxels=true (got 300)");
 }

@@ -474,7 +474,7 @@ TEST(SparseMap, AMemoryBudgetIsRefusedForTheDenseGridAndWithoutAPlaceForItsFile)
   Settings settings = preset("default");
   setParameter(&settings, "MapType", std::string("dense"));
   setParameter(&settings, "MaxMemoryMB", 100.0);
-  ASSERT_TRUE(settings.keepToOneMapWhereNeeded({"MapType", "MaxMemoryMB"}, false, /*swaps_submaps=*/true)) << "one map, as the user is told";
+  ASSERT_TRUE(settings.keepToOneMapWhereNeeded({"MapType", "MaxMemoryMB"}, false)) << "one map, as the user is told";
   const std::vector<std::string> violations = settings.validate();
   ASSERT_EQ(violations.size(), 1u);
   EXPECT_NE(violations[0].find("MaxMemoryMB=100 applies to MapType=sparse"), std::string::npos) << violations[0];

@@ -463,7 +463,7 @@ TEST(Submaps, TheDefaultPresetClosesLoopsWhereTheMapCanHoldSubmapsAndSaysWhereIt
   }
 
   Settings sparse = defaults;
-  EXPECT_FALSE(sparse.keepToOneMapWhereNeeded({"MapType"}, false, /*swaps_submaps=*/true).has_value());
+  EXPECT_FALSE(sparse.keepToOneMapWhereNeeded({"MapType"}, false).has_value());
   EXPECT_TRUE(sparse.pipeline.loops.enabled);
   EXPECT_TRUE(sparse.validate().empty());
 
@@ -471,7 +471,7 @@ TEST(Submaps, TheDefaultPresetClosesLoopsWhereTheMapCanHoldSubmapsAndSaysWhereIt
   // loops, said once, and the settings valid.
   Settings dense = defaults;
   setParameterFromText(&dense, "MapType", "dense");
-  const auto dense_note = dense.keepToOneMapWhereNeeded({"MapType"}, false, /*swaps_submaps=*/true);
+  const auto dense_note = dense.keepToOneMapWhereNeeded({"MapType"}, false);
   ASSERT_TRUE(dense_note.has_value());
   EXPECT_NE(dense_note->find("MapType=dense"), std::string::npos) << *dense_note;
   EXPECT_NE(dense_note->find("LoopClosure=false"), std::string::npos) << *dense_note;
@@ -479,36 +479,27 @@ TEST(Submaps, TheDefaultPresetClosesLoopsWhereTheMapCanHoldSubmapsAndSaysWhereIt
   EXPECT_FALSE(dense.pipeline.loops.enabled);
   EXPECT_TRUE(dense.validate().empty()) << dense.validate()[0];
 
-  // A memory bound: submaps where the caller swaps them whole (the offline runner), one map where
-  // it cannot (the node, whose publisher copies every submap).
+  // A memory bound keeps the submaps and loops: whole submaps go to the swap file.
   Settings swapping = defaults;
   setParameterFromText(&swapping, "MaxMemoryMB", "64");
-  EXPECT_FALSE(swapping.keepToOneMapWhereNeeded({"MaxMemoryMB"}, false, /*swaps_submaps=*/true).has_value());
+  EXPECT_FALSE(swapping.keepToOneMapWhereNeeded({"MaxMemoryMB"}, false).has_value());
   EXPECT_TRUE(swapping.pipeline.submaps.enabled());
   EXPECT_TRUE(swapping.pipeline.loops.enabled);
   EXPECT_TRUE(swapping.validate().empty());
-  Settings swapping_here = defaults;
-  setParameterFromText(&swapping_here, "MaxMemoryMB", "64");
-  const auto swap_note = swapping_here.keepToOneMapWhereNeeded({"MaxMemoryMB"}, false, /*swaps_submaps=*/false);
-  ASSERT_TRUE(swap_note.has_value());
-  EXPECT_NE(swap_note->find("MaxMemoryMB=64"), std::string::npos) << *swap_note;
-  EXPECT_FALSE(swapping_here.pipeline.submaps.enabled());
-  EXPECT_FALSE(swapping_here.pipeline.loops.enabled);
-  EXPECT_TRUE(swapping_here.validate().empty());
 
   Settings no_loops = defaults;
   setParameterFromText(&no_loops, "LoopClosure", "false");
-  const auto no_loops_note = no_loops.keepToOneMapWhereNeeded({"LoopClosure"}, false, /*swaps_submaps=*/true);
+  const auto no_loops_note = no_loops.keepToOneMapWhereNeeded({"LoopClosure"}, false);
   ASSERT_TRUE(no_loops_note.has_value()) << "submaps without loops only cost";
   EXPECT_NE(no_loops_note->find("LoopClosure=false"), std::string::npos) << *no_loops_note;
   EXPECT_FALSE(no_loops.pipeline.submaps.enabled());
   Settings submaps_alone = defaults;
   setParameterFromText(&submaps_alone, "LoopClosure", "false");
-  EXPECT_FALSE(submaps_alone.keepToOneMapWhereNeeded({"LoopClosure", "SubmapSize"}, false, /*swaps_submaps=*/true).has_value());
+  EXPECT_FALSE(submaps_alone.keepToOneMapWhereNeeded({"LoopClosure", "SubmapSize"}, false).has_value());
   EXPECT_TRUE(submaps_alone.pipeline.submaps.enabled()) << "submaps alone, when both are typed";
 
   Settings loading_grid = defaults;
-  const auto grid_note = loading_grid.keepToOneMapWhereNeeded({}, true, /*swaps_submaps=*/true);
+  const auto grid_note = loading_grid.keepToOneMapWhereNeeded({}, true);
   ASSERT_TRUE(grid_note.has_value());
   EXPECT_NE(grid_note->find(".vti"), std::string::npos) << *grid_note;
   EXPECT_FALSE(loading_grid.pipeline.submaps.enabled());
@@ -516,7 +507,7 @@ TEST(Submaps, TheDefaultPresetClosesLoopsWhereTheMapCanHoldSubmapsAndSaysWhereIt
   // What the user typed stands, and is refused by the parameter they typed.
   Settings typed_size = defaults;
   setParameterFromText(&typed_size, "MapType", "dense");
-  EXPECT_FALSE(typed_size.keepToOneMapWhereNeeded({"MapType", "SubmapSize"}, false, /*swaps_submaps=*/true).has_value());
+  EXPECT_FALSE(typed_size.keepToOneMapWhereNeeded({"MapType", "SubmapSize"}, false).has_value());
   ASSERT_EQ(typed_size.validate().size(), 1u);
   EXPECT_NE(typed_size.validate()[0].find("SubmapSize=1 applies to MapType=sparse only"), std::string::npos);
 
@@ -525,7 +516,7 @@ TEST(Submaps, TheDefaultPresetClosesLoopsWhereTheMapCanHoldSubmapsAndSaysWhereIt
   const auto refusalWithLoopsTyped = [&](const char* name, const char* value) {
     Settings typed = defaults;
     setParameterFromText(&typed, name, value);
-    EXPECT_TRUE(typed.keepToOneMapWhereNeeded({name, "LoopClosure"}, false, /*swaps_submaps=*/true).has_value()) << name << ": one map, said";
+    EXPECT_TRUE(typed.keepToOneMapWhereNeeded({name, "LoopClosure"}, false).has_value()) << name << ": one map, said";
     const std::vector<std::string> errors = typed.validate();
     return errors.size() == 1 ? errors[0] : std::to_string(errors.size()) + " errors, not one";
   };
@@ -535,18 +526,18 @@ TEST(Submaps, TheDefaultPresetClosesLoopsWhereTheMapCanHoldSubmapsAndSaysWhereIt
   // One map typed: loop closure goes with the submaps, said once, unless it was typed too.
   Settings one_map = defaults;
   setParameterFromText(&one_map, "SubmapSize", "0");
-  const auto one_map_note = one_map.keepToOneMapWhereNeeded({"SubmapSize"}, false, /*swaps_submaps=*/true);
+  const auto one_map_note = one_map.keepToOneMapWhereNeeded({"SubmapSize"}, false);
   ASSERT_TRUE(one_map_note.has_value()) << "SubmapSize=0 alone asks for one map";
   EXPECT_NE(one_map_note->find("LoopClosure=false"), std::string::npos) << *one_map_note;
   EXPECT_FALSE(one_map.pipeline.loops.enabled);
   EXPECT_TRUE(one_map.validate().empty()) << one_map.validate()[0];
   Settings one_map_with_loops = defaults;
   setParameterFromText(&one_map_with_loops, "SubmapSize", "0");
-  EXPECT_FALSE(one_map_with_loops.keepToOneMapWhereNeeded({"SubmapSize", "LoopClosure"}, false, /*swaps_submaps=*/true).has_value());
+  EXPECT_FALSE(one_map_with_loops.keepToOneMapWhereNeeded({"SubmapSize", "LoopClosure"}, false).has_value());
   ASSERT_EQ(one_map_with_loops.validate().size(), 1u);
   EXPECT_NE(one_map_with_loops.validate()[0].find("LoopClosure=true needs SubmapSize > 0"), std::string::npos);
   Settings paper = preset("paper");
-  EXPECT_FALSE(paper.keepToOneMapWhereNeeded({}, false, /*swaps_submaps=*/true).has_value()) << "the paper's one map needs no note";
+  EXPECT_FALSE(paper.keepToOneMapWhereNeeded({}, false).has_value()) << "the paper's one map needs no note";
 }
 
 /// Whether two sparse maps hold the same blocks, voxel for voxel and colour for colour.

@@ -35,17 +35,15 @@ struct Settings {
   /// the reference release's launch files set them, but the user must be told. Empty when every
   /// given parameter takes effect.
   std::vector<std::string> withoutEffect(const std::vector<std::string>& given) const;
-  /// The default preset's submaps (SubmapSize 1 m) and loop closure hold for a sparse map.
-  /// Where the user did not type SubmapSize (`given`: names as typed) and typed LoopClosure=false
-  /// (submaps serve loop closure), or the map cannot hold submaps (MapType=dense,
-  /// `loads_dense_map`: the map to be loaded is a dense grid, or MaxMemoryMB > 0 where the caller
-  /// cannot bound the memory of submaps: !`swaps_submaps`), it sets one map, and loop closure off
-  /// unless typed, and says so in a sentence to show the user once; where one map was asked for
-  /// (SubmapSize=0) and LoopClosure not typed, loop closure off, said alike. A SubmapSize or
-  /// LoopClosure the user typed is left for validate() (or the caller) to refuse with the other
-  /// parameter's name.
-  std::optional<std::string> keepToOneMapWhereNeeded(const std::vector<std::string>& given, bool loads_dense_map,
-                                                     bool swaps_submaps);
+  /// The default preset's submaps (SubmapSize 1 m) and loop closure hold for a sparse map (under
+  /// MaxMemoryMB too: whole submaps are swapped). Where the user did not type SubmapSize (`given`:
+  /// names as typed) and typed LoopClosure=false (submaps serve loop closure), or the map cannot
+  /// hold submaps (MapType=dense, or `loads_dense_map`: the map to be loaded is a dense grid), it
+  /// sets one map, and loop closure off unless typed, and says so in a sentence to show the user
+  /// once; where one map was asked for (SubmapSize=0) and LoopClosure not typed, loop closure off,
+  /// said alike. A SubmapSize or LoopClosure the user typed is left for validate() to refuse with
+  /// the other parameter's name.
+  std::optional<std::string> keepToOneMapWhereNeeded(const std::vector<std::string>& given, bool loads_dense_map);
 };
 
 /// A parameter's value as it travels between the command line, the ROS parameter server,

@@ -49,8 +49,10 @@ class MapSnapshot {
 /// One part of the live map: a submap (the whole map when there are none), and where the pose
 /// graph places its frame in the tracker's world.
 struct LiveMapPart {
-  const sdf_tracker::TsdfMap* map = nullptr;
+  const sdf_tracker::TsdfMap* map = nullptr;  ///< none while swapped
   Eigen::Isometry3d T_W_part = Eigen::Isometry3d::Identity();
+  /// A closed submap in the swap file (MaxMemoryMB): the publisher lets its copy go too.
+  bool swapped = false;
 };
 
 /// Publishes the map as ~cloud, ~mesh and ~mesh_blocks from a snapshot on its own low-priority
@@ -60,6 +62,8 @@ struct LiveMapPart {
 /// A map of submaps: ~cloud and ~mesh show them merged where the pose graph places them (one
 /// surface where two overlap); ~mesh_blocks sends each submap's chunks at its place, and when a
 /// solution of the graph moves a submap, its chunks again at the new place, not meshed again.
+/// A submap swapped out (MaxMemoryMB) leaves the publisher's copies: its chunks stay as sent (and
+/// move with it), and ~cloud and ~mesh show the submaps in memory, as for blocks of one map.
 class MapPublisher {
  public:
   /// `live` gives the map's parts (SdfPipeline's submaps, oldest first, the active one last; one
@@ -87,6 +91,7 @@ class MapPublisher {
     Eigen::Isometry3d shown_T_map_part = Eigen::Isometry3d::Identity();  ///< where they were sent
     bool held_colour = false;  ///< the part held colour at the last ~mesh_blocks update
     bool meshed = false;       ///< it was on ~mesh_blocks before
+    bool swapped = false;      ///< its submap went to the swap file: no snapshot, no copy
   };
 
   void run();
