@@ -180,26 +180,30 @@ bool MapPublisher::updateParts() {
     parts_.resize(placements.size());
     start_over_ = true;
   }
-  while (parts_.size() < placements.size()) {
-    const size_t index = parts_.size();
+  const auto newPart = [this](size_t index) {
     Part part;
     part.snapshot = std::make_unique<MapSnapshot>(map_mutex_, [this, index]() -> const st::TsdfMap* {
       const std::vector<LiveMapPart> live = live_();
       return index < live.size() ? live[index].map : nullptr;
     });
-    parts_.push_back(std::move(part));
-  }
+    return part;
+  };
+  while (parts_.size() < placements.size()) parts_.push_back(newPart(parts_.size()));
   for (size_t i = 0; i < parts_.size(); ++i) {
     Part& part = parts_[i];
-    part.T_W_part = placements[i];
-    if (swapped[i] || part.swapped) {
+    if (swapped[i]) {
       // Its chunks as sent stay; its copy and mesher's state go (a swapped submap never changes).
       part.swapped = true;
       part.snapshot.reset();
       part.copy = nullptr;
       part.mesher = st::ChunkedMesher();
-      continue;
+    } else if (part.swapped) {
+      // In memory where a swapped one was: another map replaced the map, and the viewer starts over.
+      part = newPart(i);
+      start_over_ = true;
     }
+    part.T_W_part = placements[i];
+    if (part.swapped) continue;
     part.copy = part.snapshot->update();
     if (!part.copy) return false;  // the map changed since the parts were counted: next time
   }
