@@ -292,9 +292,8 @@ void SdfPipeline::relocalise(const std::optional<Eigen::Isometry3d>& guess) {
     // A camera further from every mapped voxel than it sees cannot be in the map: its submaps,
     // each where the graph places it (the guess is in the map frame, where the search looks).
     Eigen::AlignedBox3d box = transformedBox(active_.T_map_W, Eigen::AlignedBox3d(mappedBox(*map_).cast<double>()));
-    for (int node = 0; node < static_cast<int>(closed_submaps_.size()); ++node) {
-      box.extend(transformedBox(closed_submaps_.place(node).T_map_W,
-                                Eigen::AlignedBox3d(closed_submaps_.mappedBox(node).cast<double>())));
+    for (const SubmapPlace& place : closed_submaps_.places()) {
+      box.extend(transformedBox(place.T_map_W, Eigen::AlignedBox3d(closed_submaps_.mappedBox(place.node).cast<double>())));
     }
     const Eigen::Vector3d position = guess->translation();
     const Eigen::Vector3d outside = (box.min() - position).cwiseMax(position - box.max()).cwiseMax(0.0);
@@ -570,14 +569,11 @@ void SdfPipeline::startSubmap(bool after_search) {
     // new submap to the one nearest it. No odometry ties it to the others (the way there was not
     // walked): the join counts as a long path, so that loops to them are sought at once and they
     // are not tracked with it as recent ones.
-    const SubmapPlace* nearest = &closed;
-    for (int node = 0; node < static_cast<int>(closed_submaps_.size()); ++node) {
-      const SubmapPlace& place = closed_submaps_.place(node);
-      if ((place.T_map_anchor().translation() - T_W_C_.translation()).norm() <
-          (nearest->T_map_anchor().translation() - T_W_C_.translation()).norm()) {
-        nearest = &place;
-      }
-    }
+    const std::vector<SubmapPlace>& places = closed_submaps_.places();
+    const auto nearest = std::min_element(places.begin(), places.end(), [&](const SubmapPlace& a, const SubmapPlace& b) {
+      return (a.T_map_anchor().translation() - T_W_C_.translation()).norm() <
+             (b.T_map_anchor().translation() - T_W_C_.translation()).norm();
+    });
     active_.path_m = closed.path_m + std::max(config_.loops.min_path_m, config_.submaps.track_recent_m);
     graph_.addNode(active_.T_map_anchor());
     // (The search's covariance is not kept: the loop's own sigma and the drift from that anchor.)
@@ -618,8 +614,8 @@ void SdfPipeline::mergeRecentSubmaps() {
   waitForRecentMerge();  // (a merge still running would land after this one)
   RecentPlacements placements;
   const Eigen::Isometry3d T_active_map = active_.T_map_W.inverse();
-  for (int node = 0; node < static_cast<int>(closed_submaps_.size()); ++node) {
-    if (isRecent(node)) placements.emplace_back(node, T_active_map * closed_submaps_.place(node).T_map_W);
+  for (const SubmapPlace& place : closed_submaps_.places()) {
+    if (isRecent(place.node)) placements.emplace_back(place.node, T_active_map * place.T_map_W);
   }
   if (placements.empty()) return;
   // Closed submaps are not written to while they are tracked with recent ones (no handover). Those
@@ -704,9 +700,7 @@ const SubmapPlace& SdfPipeline::submapPlace(int node) const {
 
 std::vector<Eigen::Isometry3d> SdfPipeline::submapFrames() const {
   std::vector<Eigen::Isometry3d> frames;
-  for (int node = 0; node < static_cast<int>(closed_submaps_.size()); ++node) {
-    frames.push_back(closed_submaps_.place(node).T_map_W);
-  }
+  for (const SubmapPlace& place : closed_submaps_.places()) frames.push_back(place.T_map_W);
   frames.push_back(active_.T_map_W);
   return frames;
 }

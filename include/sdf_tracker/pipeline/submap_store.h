@@ -36,6 +36,8 @@ class SubmapStore {
   /// Where submap `node` lies; throws std::out_of_range for no such submap.
   const SubmapPlace& place(int node) const { return places_.at(static_cast<size_t>(node)); }
   SubmapPlace& place(int node) { return places_.at(static_cast<size_t>(node)); }
+  /// Every submap's place, by node.
+  const std::vector<SubmapPlace>& places() const { return places_; }
   const SubmapPlace& newestPlace() const { return places_.back(); }
   SubmapPlace& newestPlace() { return places_.back(); }
 
