@@ -293,7 +293,8 @@ void SdfPipeline::relocalise(const std::optional<Eigen::Isometry3d>& guess) {
     // each where the graph places it (the guess is in the map frame, where the search looks).
     Eigen::AlignedBox3d box = transformedBox(active_.T_map_W, Eigen::AlignedBox3d(mappedBox(*map_).cast<double>()));
     for (const SubmapPlace& place : closed_submaps_.places()) {
-      box.extend(transformedBox(place.T_map_W, Eigen::AlignedBox3d(closed_submaps_.mappedBox(place.node).cast<double>())));
+      box.extend(
+          transformedBox(place.T_map_W, Eigen::AlignedBox3d(closed_submaps_.mappedBox(place.node).cast<double>())));
     }
     const Eigen::Vector3d position = guess->translation();
     const Eigen::Vector3d outside = (box.min() - position).cwiseMax(position - box.max()).cwiseMax(0.0);
@@ -570,10 +571,11 @@ void SdfPipeline::startSubmap(bool after_search) {
     // walked): the join counts as a long path, so that loops to them are sought at once and they
     // are not tracked with it as recent ones.
     const std::vector<SubmapPlace>& places = closed_submaps_.places();
-    const auto nearest = std::min_element(places.begin(), places.end(), [&](const SubmapPlace& a, const SubmapPlace& b) {
-      return (a.T_map_anchor().translation() - T_W_C_.translation()).norm() <
-             (b.T_map_anchor().translation() - T_W_C_.translation()).norm();
-    });
+    const auto nearest =
+        std::min_element(places.begin(), places.end(), [&](const SubmapPlace& a, const SubmapPlace& b) {
+          return (a.T_map_anchor().translation() - T_W_C_.translation()).norm() <
+                 (b.T_map_anchor().translation() - T_W_C_.translation()).norm();
+        });
     active_.path_m = closed.path_m + std::max(config_.loops.min_path_m, config_.submaps.track_recent_m);
     graph_.addNode(active_.T_map_anchor());
     // (The search's covariance is not kept: the loop's own sigma and the drift from that anchor.)
