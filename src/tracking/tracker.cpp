@@ -1,11 +1,14 @@
 #include "sdf_tracker/tracking/tracker.h"
 
 #include <cmath>
+#include <cstdint>
 #include <sstream>
+#include <vector>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
+#include "sdf_tracker/util/parallel.h"
 #include "sdf_tracker/util/se3.h"
 #include "sdf_tracker/util/validation.h"
 
@@ -40,8 +43,11 @@ struct NormalEquations {
   }
 };
 
-#pragma omp declare reduction(sumEquations : NormalEquations : omp_out += omp_in) \
-    initializer(omp_priv = NormalEquations())
+/// The points are summed in this many stretches (forEachStretch: a thread whose core the system
+/// gives to other work delays the sum by a stretch, not by its share of the points), and the
+/// stretches' sums are added in order: the sum is the same whichever thread took which stretch,
+/// and however many threads there are.
+constexpr int kSumStretches = 64;
 
 /// Beside another odometry, directions whose scaled eigenvalue is under this fraction of the
 /// largest are left to it (twice the default MinInverseCondition), and the covariance states them
@@ -94,22 +100,19 @@ size_t countInside(const std::vector<Eigen::Vector3f>& points_C, const Eigen::Is
   return count;
 }
 
-/// Builds the normal equations at pose T_W_C. The increment is expressed about the camera centre c
-/// (world axes), so rotation and translation stay decoupled wherever the volume's origin lies:
-/// d/dxi D(exp(xi) (p - c) + c) = [ (p - c) x grad D ; grad D ]. `footprint_per_depth2` is a
-/// pixel's footprint at 1 m over a voxel face, (stride / f / voxel size)^2: a point at depth z
-/// covers that times z^2 faces.
-NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_C, const FieldSampler& field,
-                                     float dmax, const Eigen::Isometry3d& T_W_C, float huber_k,
-                                     const DepthNoiseModel* noise, bool normalize_by_gradient,
-                                     float footprint_per_depth2) {
+/// The normal equations of points_C[begin, end) at pose T_W_C. The increment is expressed about
+/// the camera centre c (world axes), so rotation and translation stay decoupled wherever the
+/// volume's origin lies: d/dxi D(exp(xi) (p - c) + c) = [ (p - c) x grad D ; grad D ].
+/// `footprint_per_depth2` is a pixel's footprint at 1 m over a voxel face, (stride / f / voxel
+/// size)^2: a point at depth z covers that times z^2 faces.
+NormalEquations sumPoints(const std::vector<Eigen::Vector3f>& points_C, int64_t begin, int64_t end,
+                          const FieldSampler& field, float dmax, const Eigen::Isometry3d& T_W_C, float huber_k,
+                          const DepthNoiseModel* noise, bool normalize_by_gradient, float footprint_per_depth2) {
   const Eigen::Isometry3f T = T_W_C.cast<float>();
   const Eigen::Vector3f c = T.translation();
   const float reference_sigma = noise ? noise->referenceSigma() : 1.0f;
-  const int n = static_cast<int>(points_C.size());
   NormalEquations sum;
-#pragma omp parallel for schedule(static) reduction(sumEquations : sum)
-  for (int idx = 0; idx < n; ++idx) {
+  for (int64_t idx = begin; idx < end; ++idx) {
     const Eigen::Vector3f p_W = T * points_C[idx];
     FieldSample s;
     if (!field.sample(p_W, &s) || !(std::fabs(s.distance_m) < dmax)) continue;
@@ -144,6 +147,22 @@ NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_
     ++sum.count;
   }
   return sum;
+}
+
+/// The normal equations of all points_C at pose T_W_C (sumPoints), summed in parallel.
+NormalEquations buildNormalEquations(const std::vector<Eigen::Vector3f>& points_C, const FieldSampler& field,
+                                     float dmax, const Eigen::Isometry3d& T_W_C, float huber_k,
+                                     const DepthNoiseModel* noise, bool normalize_by_gradient,
+                                     float footprint_per_depth2) {
+  const int64_t n = static_cast<int64_t>(points_C.size());
+  std::vector<NormalEquations> stretch_sums(kSumStretches);
+  forEachStretch(kSumStretches, [&](int stretch) {
+    stretch_sums[stretch] = sumPoints(points_C, n * stretch / kSumStretches, n * (stretch + 1) / kSumStretches, field,
+                                      dmax, T_W_C, huber_k, noise, normalize_by_gradient, footprint_per_depth2);
+  });
+  NormalEquations total;
+  for (const NormalEquations& sum : stretch_sums) total += sum;
+  return total;
 }
 
 /// The data term in balanced units: the rotational block scaled by the RMS lever arm, so that
