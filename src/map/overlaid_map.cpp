@@ -15,53 +15,53 @@ namespace {
 
 }  // namespace
 
-class OverlaidMap::Sampler final : public FieldSampler {
- public:
-  Sampler(const OverlaidMap& map, const Eigen::AlignedBox3f& region_W)
-      : map_(map), over_(map.over_, region_W), under_(map.under_, region_W) {}
-  bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override {
-    return map_.sampleVia(p_W, [&](const SparseTsdfMap::Cell& cell, Voxel(&c)[8]) { over_.corners(cell, c); },
-                          [&](const SparseTsdfMap::Cell& cell, Voxel(&c)[8]) { under_.corners(cell, c); }, out);
-  }
-
- private:
-  const OverlaidMap& map_;
-  SparseTsdfMap::RegionReader over_, under_;
-};
-
 OverlaidMap::OverlaidMap(const SparseTsdfMap& over, const SparseTsdfMap& under, float settled_weight)
-    : TsdfMap(under.config(), under.type()), over_(over), under_(under), settled_weight_(settled_weight) {
+    : TsdfMap(under.config(), under.type()),
+      over_(over),
+      under_(under),
+      settled_weight_(settled_weight),
+      combined_(under.config()) {
   if (!over.config().sameGrid(under.config())) {
     throw std::invalid_argument("OverlaidMap: the two maps' lattices differ");
   }
   if (!(settled_weight > 0.0f)) {
     throw std::invalid_argument("OverlaidMap: settled_weight must be positive, not " + std::to_string(settled_weight));
   }
+  combine(under.blockIndices());
+  revision_read_ = under.revision();
 }
 
-template <typename ReadOver, typename ReadUnder>
-bool OverlaidMap::sampleVia(const Eigen::Vector3f& p_W, const ReadOver& readOver, const ReadUnder& readUnder,
-                            FieldSample* out) const {
-  // One grid: the cell is found once for both maps.
-  SparseTsdfMap::Cell cell;
-  if (!over_.cellAt(p_W, &cell)) return false;  // outside the blocks' reach, for both
-  Voxel over[8];
-  readOver(cell, over);
-  bool settled = true;
-  for (const Voxel& v : over) settled = settled && v.weight >= settled_weight_;
-  if (!settled) {
-    Voxel under[8];
-    readUnder(cell, under);
-    for (int c = 0; c < 8; ++c) {
-      if (over[c].weight < settled_weight_) accumulate(under[c], &over[c]);  // else over's voxel stands
+void OverlaidMap::update() {
+  if (under_.clearedAt() > revision_read_ || under_.removedAt() > revision_read_) {
+    // Blocks under no longer holds are not listed as changed: all are read again.
+    combined_.clear();
+    combine(under_.blockIndices());
+  } else if (under_.revision() != revision_read_) {
+    combine(under_.changedSince(revision_read_));
+  }
+  revision_read_ = under_.revision();
+}
+
+void OverlaidMap::combine(const std::vector<SparseTsdfMap::BlockIndex>& blocks) {
+  // Blocks are added first, by one thread; then every block is filled on its own.
+  std::vector<VoxelBlock*> into(blocks.size());
+  for (size_t i = 0; i < blocks.size(); ++i) into[i] = &combined_.allocate(blocks[i]);
+  const Voxel unobserved{under_.positiveTruncation(), 0.0f};
+#pragma omp parallel for schedule(dynamic, 16)
+  for (long i = 0; i < static_cast<long>(blocks.size()); ++i) {
+    const VoxelBlock* over = over_.find(blocks[i]);
+    const VoxelBlock& under = *under_.find(blocks[i]);
+    for (int v = 0; v < kBlockVoxels; ++v) {
+      Voxel voxel = over ? over->voxels[v] : unobserved;
+      if (voxel.weight < settled_weight_) accumulate(under.voxels[v], &voxel);  // else over's stands
+      into[i]->voxels[v] = voxel;
     }
   }
-  return interpolate(over, cell.fraction, out);
 }
 
 bool OverlaidMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
-  return sampleVia(p_W, [&](const SparseTsdfMap::Cell& cell, Voxel(&c)[8]) { over_.corners(cell, c); },
-                   [&](const SparseTsdfMap::Cell& cell, Voxel(&c)[8]) { under_.corners(cell, c); }, out);
+  // An empty region: every block through the two maps' tables.
+  return SparseTsdfMap::RegionReader(combined_, Eigen::AlignedBox3f(), &over_).sample(p_W, out);
 }
 
 Eigen::AlignedBox3f OverlaidMap::holdableRegion() const {
@@ -69,7 +69,7 @@ Eigen::AlignedBox3f OverlaidMap::holdableRegion() const {
 }
 
 std::unique_ptr<FieldSampler> OverlaidMap::sampler(const Eigen::AlignedBox3f& region_W) const {
-  return std::make_unique<Sampler>(*this, region_W);
+  return std::make_unique<SparseTsdfMap::RegionReader>(combined_, region_W, &over_);
 }
 
 void OverlaidMap::clear() { readOnly("clear"); }

@@ -218,7 +218,12 @@ bool SparseTsdfMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
   return cellCorners(p_W, corners, &fraction) && interpolate(corners, fraction, out);
 }
 
-SparseTsdfMap::RegionReader::RegionReader(const SparseTsdfMap& map, const Eigen::AlignedBox3f& region_W) : map_(map) {
+SparseTsdfMap::RegionReader::RegionReader(const SparseTsdfMap& map, const Eigen::AlignedBox3f& region_W,
+                                          const SparseTsdfMap* beneath)
+    : map_(map), beneath_(beneath) {
+  if (beneath && !beneath->config().sameGrid(map.config())) {
+    throw std::invalid_argument("RegionReader: the map beneath lies on another grid");
+  }
   // A cell at the box's far edge reads the next voxel too.
   const Eigen::AlignedBox3f cells_W(region_W.min(), region_W.max() + Eigen::Vector3f::Constant(map.voxelSize()));
   const BlockBox box = map.blockRange(cells_W);
@@ -226,10 +231,12 @@ SparseTsdfMap::RegionReader::RegionReader(const SparseTsdfMap& map, const Eigen:
   first_ = box.first;
   dims_ = box.last - box.first + BlockIndex::Ones();
   cells_.assign(static_cast<size_t>(box.count()), nullptr);
-  map.forEachBlockIn(box, [this](const BlockIndex& index, const VoxelBlock& block) {
+  const auto place = [this](const BlockIndex& index, const VoxelBlock& block) {
     const BlockIndex at = index - first_;
     cells_[(at.z() * dims_.y() + at.y()) * dims_.x() + at.x()] = &block;
-  });
+  };
+  if (beneath) beneath->forEachBlockIn(box, place);
+  map.forEachBlockIn(box, place);  // over those beneath
 }
 
 bool SparseTsdfMap::RegionReader::cellCorners(const Eigen::Vector3f& p_W, Voxel (&corners)[8],

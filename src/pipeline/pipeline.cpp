@@ -553,7 +553,8 @@ bool SdfPipeline::search(const DepthImage& filtered, const PinholeCamera& camera
 
 size_t SdfPipeline::mapMemoryBytes() const {
   size_t bytes = map_->memoryBytes() + (search_map_ ? search_map_->memoryBytes() : 0) +
-                 (recent_submaps_ ? recent_submaps_->memoryBytes() : 0);
+                 (recent_submaps_ ? recent_submaps_->memoryBytes() : 0) +
+                 (tracked_map_ ? tracked_map_->memoryBytes() : 0);
   return bytes + closed_submaps_.memoryBytes();
 }
 
@@ -928,6 +929,7 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
                                             : predictPose(timestamp_s);
     // Swapped blocks the frame may see come back first; the held pose's too, for the retry below.
     restoreNear(predicted, ideal_camera, furthest_m, &report);
+    if (tracked_map_) tracked_map_->update();  // what the last frame fused into the active submap
     restoreNear(T_W_C_, ideal_camera, furthest_m, &report);
     MotionPrior prior;
     if (report.predicted_by_odometry) {

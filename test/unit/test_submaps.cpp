@@ -222,7 +222,53 @@ TEST(OverlaidMap, IsAReadOnlyViewOfOneLattice) {
   EXPECT_THROW(view.clear(), std::logic_error);
   EXPECT_THROW(view.enableColour(), std::logic_error);
   EXPECT_THROW(view.clone(), std::logic_error);
-  EXPECT_EQ(view.memoryBytes(), 0u);
+  EXPECT_EQ(view.memoryBytes(), 0u) << "under holds no block: the overlay holds none of its own";
+}
+
+/// fillPlane() as a frame fused into `map` would leave it: its blocks stamped with a new revision.
+void fusePlane(SparseTsdfMap* map, int x0, int x1, float offset_m, float weight) {
+  const uint64_t revision = map->beginRevision();
+  fillPlane(map, x0, x1, offset_m, weight);
+  map->forEachBlock([revision](const SparseTsdfMap::BlockIndex&, VoxelBlock& block) { block.changed_at = revision; });
+}
+
+TEST(OverlaidMap, TakesInWhatTheMapUnderItChangedOnUpdate) {
+  SparseTsdfMap over(sparseLattice()), under(sparseLattice());
+  fillPlane(&over, 0, 16, 0.1f, 6.0f);
+  OverlaidMap overlay(over, under, 64.0f);
+  const auto at = [](float x) { return Eigen::Vector3f(x, 0.071f, 0.053f); };
+  const Eigen::AlignedBox3f region(Eigen::Vector3f::Zero(), Eigen::Vector3f::Constant(0.5f));
+  FieldSample s, m;
+  EXPECT_FALSE(overlay.sample(at(0.4f), &s)) << "x = 0.4 m (voxel 20): over holds none, under nothing yet";
+  EXPECT_EQ(overlay.memoryBytes(), 0u);
+
+  // A frame fused into under: read only once the overlay is updated.
+  fusePlane(&under, 8, 24, 0.12f, 2.0f);
+  EXPECT_FALSE(overlay.sample(at(0.4f), &s)) << "read before update(): what the overlay last took in";
+  overlay.update();
+  EXPECT_GT(overlay.memoryBytes(), 0u) << "a block of its own for each of under's";
+  const SparseTsdfMap merged = mergeMaps({{&over}, {&under}});
+  const std::unique_ptr<FieldSampler> sampler = overlay.sampler(region);
+  for (float x = -0.1f; x < 0.6f; x += 0.0137f) {
+    const bool sampled = merged.sample(at(x), &m);
+    ASSERT_EQ(overlay.sample(at(x), &s), sampled) << "x = " << x;
+    ASSERT_EQ(sampler->sample(at(x), &s), sampled) << "x = " << x;
+    if (sampled) {
+      EXPECT_NEAR(s.distance_m, m.distance_m, 1e-6) << "x = " << x;
+    }
+  }
+
+  // A block under no longer holds (swapped out) is over's alone again.
+  under.remove(SparseTsdfMap::blockOf({20, 0, 0}));
+  overlay.update();
+  EXPECT_FALSE(overlay.sample(at(0.4f), &s)) << "voxel 20's block is gone from under";
+  ASSERT_TRUE(overlay.sample(at(0.23f), &s));
+  EXPECT_NEAR(s.distance_m, ((0.23f - 0.1f) * 6.0f + (0.23f - 0.12f) * 2.0f) / 8.0f, 1e-6)
+      << "voxel 11.5's block is still both maps'";
+  under.clear();
+  overlay.update();
+  ASSERT_TRUE(overlay.sample(at(0.23f), &s));
+  EXPECT_NEAR(s.distance_m, 0.23f - 0.1f, 1e-6) << "under cleared: over alone";
 }
 
 constexpr double kFramePeriod_s = 1.0 / 30.0;

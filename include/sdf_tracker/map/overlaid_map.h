@@ -1,6 +1,8 @@
 #pragma once
 
+#include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "sdf_tracker/map/sparse_tsdf_map.h"
 
@@ -10,18 +12,24 @@ namespace sdf_tracker {
 /// mergeMaps() would merge them, voxel by voxel): where both hold a voxel, the weighted average of
 /// their distances (as fusing one's frames into the other averages them); where one holds it, that
 /// one's. Where `over`'s voxel is settled (its weight at least `settled_weight`, the cap of the
-/// running average: a map's new frames then move it little), `over`'s alone; a cell whose eight
-/// voxels `over` holds settled does not read `under`.
+/// running average: a map's new frames then move it little), `over`'s alone.
 ///
 /// What the tracker reads while a new submap is young: the recent submaps (over) keep the ground
-/// they hold, the active submap (under) adds what only it has seen and what it sees again. A
-/// read-only view: both maps must outlive it and stay unchanged while a sampler of it is in use;
-/// the mutating calls throw std::logic_error.
+/// they hold, the active submap (under) adds what only it has seen and what it sees again. The
+/// overlay keeps, for each block `under` holds, that block and `over`'s read as one, and is
+/// sampled as one sparse map (those blocks where it has them, `over`'s elsewhere): a sample costs
+/// what one map's does, and update() takes in what a frame fused into `under` changed. Both maps
+/// must outlive it; `over` must stay unchanged, and `under` unchanged while a sampler of the
+/// overlay is in use. The mutating calls of TsdfMap throw std::logic_error.
 class OverlaidMap final : public TsdfMap {
  public:
   /// Throws std::invalid_argument when the two maps' lattices differ or settled_weight is not
   /// positive.
   OverlaidMap(const SparseTsdfMap& over, const SparseTsdfMap& under, float settled_weight);
+
+  /// Reads `under` again where it changed since the overlay was made or last updated (a frame
+  /// fused into it); nothing when it did not change. Call it before sampling after a change.
+  void update();
 
   bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override;
   Eigen::AlignedBox3f holdableRegion() const override;
@@ -31,20 +39,21 @@ class OverlaidMap final : public TsdfMap {
   void enableColour() override;
   size_t voxelCount() const override { return over_.voxelCount() + under_.voxelCount(); }
   bool observesNothing() const override { return over_.observesNothing() && under_.observesNothing(); }
-  size_t memoryBytes() const override { return 0; }  ///< a view: it holds no voxels of its own
+  /// Its own blocks (one for each of `under`'s): the two maps' are theirs.
+  size_t memoryBytes() const override { return combined_.memoryBytes(); }
   std::unique_ptr<TsdfMap> clone() const override;
 
  private:
-  class Sampler;
-  /// The overlay's rule for the cell around p_W, its voxels read through readOver/readUnder(cell,
-  /// corners).
-  template <typename ReadOver, typename ReadUnder>
-  bool sampleVia(const Eigen::Vector3f& p_W, const ReadOver& readOver, const ReadUnder& readUnder,
-                 FieldSample* out) const;
+  /// Makes combined_'s `blocks` (indices of blocks `under` holds) under's and over's read as one.
+  void combine(const std::vector<SparseTsdfMap::BlockIndex>& blocks);
 
   const SparseTsdfMap& over_;
   const SparseTsdfMap& under_;
   float settled_weight_;
+  /// For each block `under` holds, it and `over`'s read as one (no colour: only sampled).
+  SparseTsdfMap combined_;
+  /// under_'s revision that combined_ holds.
+  uint64_t revision_read_ = 0;
 };
 
 }  // namespace sdf_tracker

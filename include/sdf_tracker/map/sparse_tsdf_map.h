@@ -271,9 +271,14 @@ class SparseTsdfMap : public TsdfMap {
 /// map holds none), filled once: samples and cells whose blocks lie in the box read them from it,
 /// others go through the map's table. What a loop over a frame's points samples a sparse map
 /// through (SparseTsdfMap::sampler()); valid while the map is neither changed nor destroyed.
+///
+/// Given a second map of the same grid `beneath`, it reads the two as one map whose blocks are
+/// `map`'s where `map` holds the block and `beneath`'s elsewhere (what OverlaidMap is read
+/// through); then `beneath` too must stay unchanged.
 class SparseTsdfMap::RegionReader final : public FieldSampler {
  public:
-  RegionReader(const SparseTsdfMap& map, const Eigen::AlignedBox3f& region_W);
+  /// Throws std::invalid_argument when `beneath` is on another grid.
+  RegionReader(const SparseTsdfMap& map, const Eigen::AlignedBox3f& region_W, const SparseTsdfMap* beneath = nullptr);
   /// As SparseTsdfMap::sample(), with the same result.
   bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override;
   /// As SparseTsdfMap::cellCorners(), with the same result.
@@ -294,12 +299,14 @@ class SparseTsdfMap::RegionReader final : public FieldSampler {
                z = static_cast<unsigned>(block.z() - first_.z());
     if (x >= static_cast<unsigned>(dims_.x()) || y >= static_cast<unsigned>(dims_.y()) ||
         z >= static_cast<unsigned>(dims_.z())) {
-      return map_.blocks_.find(keyOf(block));
+      const VoxelBlock* found = map_.blocks_.find(keyOf(block));
+      return found || !beneath_ ? found : beneath_->blocks_.find(keyOf(block));
     }
     return cells_[(z * dims_.y() + y) * dims_.x() + x];
   }
 
   const SparseTsdfMap& map_;
+  const SparseTsdfMap* beneath_;
   BlockIndex first_ = BlockIndex::Zero();
   Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
   std::vector<const VoxelBlock*> cells_;

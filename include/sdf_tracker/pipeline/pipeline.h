@@ -18,6 +18,7 @@
 #include "sdf_tracker/map/block_swap.h"
 #include "sdf_tracker/graph/background_solver.h"
 #include "sdf_tracker/graph/pose_graph.h"
+#include "sdf_tracker/map/overlaid_map.h"
 #include "sdf_tracker/map/sparse_tsdf_map.h"
 #include "sdf_tracker/map/tsdf_map.h"
 #include "sdf_tracker/pipeline/loop_closure.h"
@@ -484,7 +485,7 @@ class SdfPipeline {
   /// it), and the overlay of them on the active submap that frames are tracked against (until the
   /// merge lands, the overlay of the submap just closed).
   std::unique_ptr<SparseTsdfMap> recent_submaps_;
-  std::unique_ptr<TsdfMap> tracked_map_;
+  std::unique_ptr<OverlaidMap> tracked_map_;
   /// What the overlay holds, placed in the active one's frame.
   RecentPlacements recent_placements_;
   /// A merge of the recent submaps running in the background (it reads closed submaps: declared
