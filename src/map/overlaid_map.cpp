@@ -13,6 +13,11 @@ namespace {
   throw std::logic_error(std::string("OverlaidMap::") + call + ": a view of two maps cannot be changed");
 }
 
+[[noreturn]] void stale(const char* call) {
+  throw std::logic_error(std::string("OverlaidMap::") + call +
+                         ": the map under it changed since it last took it in (call update() first)");
+}
+
 }  // namespace
 
 OverlaidMap::OverlaidMap(const SparseTsdfMap& over, const SparseTsdfMap& under, float settled_weight)
@@ -60,6 +65,7 @@ void OverlaidMap::combine(const std::vector<SparseTsdfMap::BlockIndex>& blocks) 
 }
 
 bool OverlaidMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
+  if (under_.revision() != revision_read_) stale("sample");
   // An empty region: every block through the two maps' tables.
   return SparseTsdfMap::RegionReader(combined_, Eigen::AlignedBox3f(), &over_).sample(p_W, out);
 }
@@ -69,6 +75,7 @@ Eigen::AlignedBox3f OverlaidMap::holdableRegion() const {
 }
 
 std::unique_ptr<FieldSampler> OverlaidMap::sampler(const Eigen::AlignedBox3f& region_W) const {
+  if (under_.revision() != revision_read_) stale("sampler");
   return std::make_unique<SparseTsdfMap::RegionReader>(combined_, region_W, &over_);
 }
 

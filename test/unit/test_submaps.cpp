@@ -244,7 +244,8 @@ TEST(OverlaidMap, TakesInWhatTheMapUnderItChangedOnUpdate) {
 
   // A frame fused into under: read only once the overlay is updated.
   fusePlane(&under, 8, 24, 0.12f, 2.0f);
-  EXPECT_FALSE(overlay.sample(at(0.4f), &s)) << "read before update(): what the overlay last took in";
+  EXPECT_THROW(overlay.sample(at(0.4f), &s), std::logic_error) << "sampled before update()";
+  EXPECT_THROW(overlay.sampler(region), std::logic_error) << "sampled before update()";
   overlay.update();
   EXPECT_GT(overlay.memoryBytes(), 0u) << "a block of its own for each of under's";
   const SparseTsdfMap merged = mergeMaps({{&over}, {&under}});

@@ -20,7 +20,8 @@ namespace sdf_tracker {
 /// sampled as one sparse map (those blocks where it has them, `over`'s elsewhere): a sample costs
 /// what one map's does, and update() takes in what a frame fused into `under` changed. Both maps
 /// must outlive it; `over` must stay unchanged, and `under` unchanged while a sampler of the
-/// overlay is in use. The mutating calls of TsdfMap throw std::logic_error.
+/// overlay is in use. Sampling after `under` changed, before update(), and the mutating calls of
+/// TsdfMap throw std::logic_error.
 class OverlaidMap final : public TsdfMap {
  public:
   /// Throws std::invalid_argument when the two maps' lattices differ or settled_weight is not
@@ -28,7 +29,7 @@ class OverlaidMap final : public TsdfMap {
   OverlaidMap(const SparseTsdfMap& over, const SparseTsdfMap& under, float settled_weight);
 
   /// Reads `under` again where it changed since the overlay was made or last updated (a frame
-  /// fused into it); nothing when it did not change. Call it before sampling after a change.
+  /// fused into it); nothing when it did not change.
   void update();
 
   bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override;
