@@ -10,12 +10,7 @@ namespace sdf_tracker {
 namespace {
 
 [[noreturn]] void readOnly(const char* call) {
-  throw std::logic_error(std::string("OverlaidMap::") + call + ": a view of two maps cannot be changed");
-}
-
-[[noreturn]] void stale(const char* call) {
-  throw std::logic_error(std::string("OverlaidMap::") + call +
-                         ": the map under it changed since it last took it in (call update() first)");
+  throw std::logic_error(std::string("OverlaidMap::") + call + ": an overlay of two maps cannot be changed");
 }
 
 }  // namespace
@@ -25,7 +20,8 @@ OverlaidMap::OverlaidMap(const SparseTsdfMap& over, const SparseTsdfMap& under, 
       over_(over),
       under_(under),
       settled_weight_(settled_weight),
-      combined_(under.config()) {
+      combined_(under.config()),
+      over_revision_(over.revision()) {
   if (!over.config().sameGrid(under.config())) {
     throw std::invalid_argument("OverlaidMap: the two maps' lattices differ");
   }
@@ -37,14 +33,29 @@ OverlaidMap::OverlaidMap(const SparseTsdfMap& over, const SparseTsdfMap& under, 
 }
 
 void OverlaidMap::update() {
-  if (under_.clearedAt() > revision_read_ || under_.removedAt() > revision_read_) {
-    // Blocks under no longer holds are not listed as changed: all are read again.
+  if (over_.revision() == over_revision_ && under_.revision() == revision_read_) return;
+  if (over_.revision() != over_revision_ || under_.clearedAt() > revision_read_) {
+    // Over's changes are not followed block by block: every block is combined again.
     combined_.clear();
     combine(under_.blockIndices());
-  } else if (under_.revision() != revision_read_) {
+  } else {
+    if (under_.removedAt() > revision_read_) {
+      // Blocks under no longer holds are not listed as changed: those are dropped here.
+      for (const SparseTsdfMap::BlockIndex& index : combined_.blockIndices()) {
+        if (!under_.find(index)) combined_.remove(index);
+      }
+    }
     combine(under_.changedSince(revision_read_));
   }
   revision_read_ = under_.revision();
+  over_revision_ = over_.revision();
+}
+
+void OverlaidMap::requireCurrent(const char* call) const {
+  if (over_.revision() != over_revision_ || under_.revision() != revision_read_) {
+    throw std::logic_error(std::string("OverlaidMap::") + call +
+                           ": a map it overlays changed since it last took them in (call update() first)");
+  }
 }
 
 void OverlaidMap::combine(const std::vector<SparseTsdfMap::BlockIndex>& blocks) {
@@ -65,7 +76,7 @@ void OverlaidMap::combine(const std::vector<SparseTsdfMap::BlockIndex>& blocks) 
 }
 
 bool OverlaidMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
-  if (under_.revision() != revision_read_) stale("sample");
+  requireCurrent("sample");
   // An empty region: every block through the two maps' tables.
   return SparseTsdfMap::RegionReader(combined_, Eigen::AlignedBox3f(), &over_).sample(p_W, out);
 }
@@ -75,7 +86,7 @@ Eigen::AlignedBox3f OverlaidMap::holdableRegion() const {
 }
 
 std::unique_ptr<FieldSampler> OverlaidMap::sampler(const Eigen::AlignedBox3f& region_W) const {
-  if (under_.revision() != revision_read_) stale("sampler");
+  requireCurrent("sampler");
   return std::make_unique<SparseTsdfMap::RegionReader>(combined_, region_W, &over_);
 }
 

@@ -469,7 +469,8 @@ void SdfPipeline::swapOutSubmaps(FrameReport* report) {
             << " MiB, above MaxMemoryMB=" << std::defaultfloat << config_.max_map_memory_mb
             << ": the active submap, the recent ones tracked with it (SubmapTrackRecent="
             << config_.submaps.track_recent_m
-            << " m) merged, and one searched for a loop stay in memory, and need more; raise MaxMemoryMB, or "
+            << " m) merged and overlaid on it for tracking, and one searched for a loop stay in memory, and "
+               "need more; raise MaxMemoryMB, or "
                "lower SubmapSize or SubmapTrackRecent";
     report->swap_warning = warning.str();
   }
@@ -929,8 +930,9 @@ FrameReport SdfPipeline::process(const DepthImage& depth, const PinholeCamera& c
                                             : predictPose(timestamp_s);
     // Swapped blocks the frame may see come back first; the held pose's too, for the retry below.
     restoreNear(predicted, ideal_camera, furthest_m, &report);
-    if (tracked_map_) tracked_map_->update();  // what the last frame fused into the active submap
     restoreNear(T_W_C_, ideal_camera, furthest_m, &report);
+    // The overlay takes in what changed in the active submap since the last frame (its fusion).
+    if (tracked_map_) tracked_map_->update();
     MotionPrior prior;
     if (report.predicted_by_odometry) {
       prior.odometry = odometryPrior(predicted, T_odom_C_held_->inverse() * *T_odom_C, config_.odometry_error);

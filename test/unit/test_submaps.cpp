@@ -225,6 +225,14 @@ TEST(OverlaidMap, IsAReadOnlyViewOfOneLattice) {
   EXPECT_EQ(view.memoryBytes(), 0u) << "under holds no block: the overlay holds none of its own";
 }
 
+/// The overlay's field at lattice voxel (x, 1, 1) (at a voxel, its value there): distance, and
+/// weight 1 when it was sampled.
+Voxel overlayVoxel(const OverlaidMap& overlay, int x) {
+  FieldSample s;
+  const bool sampled = overlay.sample(overlay.position(x, 1, 1), &s);
+  return {s.distance_m, sampled ? 1.0f : 0.0f};
+}
+
 /// fillPlane() as a frame fused into `map` would leave it: its blocks stamped with a new revision.
 void fusePlane(SparseTsdfMap* map, int x0, int x1, float offset_m, float weight) {
   const uint64_t revision = map->beginRevision();
@@ -259,6 +267,27 @@ TEST(OverlaidMap, TakesInWhatTheMapUnderItChangedOnUpdate) {
     }
   }
 
+  // A second frame that changes only the block of voxels 16-23 (the plane moved, more weight):
+  // that block is read anew, the others are kept as they were read.
+  const Voxel before = overlayVoxel(overlay, 12);
+  const uint64_t revision = under.beginRevision();
+  // (Voxels 8-15 are written too, but their block is not stamped as changed: not read again.)
+  for (int z = 0; z < 8; ++z) {
+    for (int y = 0; y < 8; ++y) setVoxel(&under, {12, y, z}, {0.05f, 9.0f});
+  }
+  for (int z = 0; z < 8; ++z) {
+    for (int y = 0; y < 8; ++y) {
+      for (int x = 16; x < 24; ++x) setVoxel(&under, {x, y, z}, {under.position(x, y, z).x() - 0.13f, 4.0f});
+    }
+  }
+  under.find(SparseTsdfMap::blockOf({16, 0, 0}))->changed_at = revision;
+  overlay.update();
+  ASSERT_TRUE(overlay.sample(at(0.4f), &s));
+  EXPECT_NEAR(s.distance_m, 0.4f - 0.13f, 1e-6) << "the changed block";
+  const Voxel after = overlayVoxel(overlay, 12);
+  EXPECT_EQ(after.distance_m, before.distance_m) << "a block not stamped as changed";
+  EXPECT_EQ(after.weight, before.weight);
+
   // A block under no longer holds (swapped out) is over's alone again.
   under.remove(SparseTsdfMap::blockOf({20, 0, 0}));
   overlay.update();
@@ -270,6 +299,15 @@ TEST(OverlaidMap, TakesInWhatTheMapUnderItChangedOnUpdate) {
   overlay.update();
   ASSERT_TRUE(overlay.sample(at(0.23f), &s));
   EXPECT_NEAR(s.distance_m, 0.23f - 0.1f, 1e-6) << "under cleared: over alone";
+
+  // Where over's voxels are settled (weight 6 here), what under takes in changes nothing there.
+  OverlaidMap settled(over, under, 6.0f);
+  fusePlane(&under, 8, 24, 0.12f, 2.0f);
+  settled.update();
+  ASSERT_TRUE(settled.sample(at(0.23f), &s));
+  EXPECT_NEAR(s.distance_m, 0.23f - 0.1f, 1e-6) << "over settled: over alone";
+  ASSERT_TRUE(settled.sample(at(0.4f), &s));
+  EXPECT_NEAR(s.distance_m, 0.4f - 0.12f, 1e-6) << "under alone where over holds nothing";
 }
 
 constexpr double kFramePeriod_s = 1.0 / 30.0;

@@ -19,9 +19,8 @@ namespace sdf_tracker {
 /// overlay keeps, for each block `under` holds, that block and `over`'s read as one, and is
 /// sampled as one sparse map (those blocks where it has them, `over`'s elsewhere): a sample costs
 /// what one map's does, and update() takes in what a frame fused into `under` changed. Both maps
-/// must outlive it; `over` must stay unchanged, and `under` unchanged while a sampler of the
-/// overlay is in use. Sampling after `under` changed, before update(), and the mutating calls of
-/// TsdfMap throw std::logic_error.
+/// must outlive it and stay unchanged while a sampler of the overlay is in use. Sampling after
+/// either changed and before update(), and the mutating calls of TsdfMap, throw std::logic_error.
 class OverlaidMap final : public TsdfMap {
  public:
   /// Throws std::invalid_argument when the two maps' lattices differ or settled_weight is not
@@ -29,7 +28,8 @@ class OverlaidMap final : public TsdfMap {
   OverlaidMap(const SparseTsdfMap& over, const SparseTsdfMap& under, float settled_weight);
 
   /// Reads `under` again where it changed since the overlay was made or last updated (a frame
-  /// fused into it); nothing when it did not change.
+  /// fused into it, blocks removed or the map cleared), and all of it when `over` changed (not
+  /// expected: the recent submaps are closed); nothing when neither did.
   void update();
 
   bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override;
@@ -47,12 +47,16 @@ class OverlaidMap final : public TsdfMap {
  private:
   /// Makes combined_'s `blocks` (indices of blocks `under` holds) under's and over's read as one.
   void combine(const std::vector<SparseTsdfMap::BlockIndex>& blocks);
+  /// Throws std::logic_error naming `call` when a map changed since the last update().
+  void requireCurrent(const char* call) const;
 
   const SparseTsdfMap& over_;
   const SparseTsdfMap& under_;
   float settled_weight_;
   /// For each block `under` holds, it and `over`'s read as one (no colour: only sampled).
   SparseTsdfMap combined_;
+  /// over_'s revision that combined_ holds.
+  uint64_t over_revision_;
   /// under_'s revision that combined_ holds.
   uint64_t revision_read_ = 0;
 };
