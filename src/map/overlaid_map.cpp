@@ -59,18 +59,27 @@ void OverlaidMap::requireCurrent(const char* call) const {
 }
 
 void OverlaidMap::combine(const std::vector<SparseTsdfMap::BlockIndex>& blocks) {
-  // Blocks are added first, by one thread; then every block is filled on its own.
-  std::vector<VoxelBlock*> into(blocks.size());
-  for (size_t i = 0; i < blocks.size(); ++i) into[i] = &combined_.allocate(blocks[i]);
-  const Voxel unobserved{under_.positiveTruncation(), 0.0f};
+  // Only blocks both maps hold: where over holds none, under's block is read as it is (as
+  // mergeMaps() takes a block that one part alone holds). Blocks are added first, by one thread;
+  // then every block is filled on its own.
+  struct Combination {
+    const VoxelBlock* over;
+    const VoxelBlock* under;
+    VoxelBlock* into;
+  };
+  std::vector<Combination> combinations;
+  for (const SparseTsdfMap::BlockIndex& index : blocks) {
+    if (const VoxelBlock* over = over_.find(index)) {
+      combinations.push_back({over, under_.find(index), &combined_.allocate(index)});
+    }
+  }
 #pragma omp parallel for schedule(dynamic, 16)
-  for (long i = 0; i < static_cast<long>(blocks.size()); ++i) {
-    const VoxelBlock* over = over_.find(blocks[i]);
-    const VoxelBlock& under = *under_.find(blocks[i]);
+  for (long i = 0; i < static_cast<long>(combinations.size()); ++i) {
+    const Combination& c = combinations[i];
     for (int v = 0; v < kBlockVoxels; ++v) {
-      Voxel voxel = over ? over->voxels[v] : unobserved;
-      if (voxel.weight < settled_weight_) accumulate(under.voxels[v], &voxel);  // else over's stands
-      into[i]->voxels[v] = voxel;
+      Voxel voxel = c.over->voxels[v];
+      if (voxel.weight < settled_weight_) accumulate(c.under->voxels[v], &voxel);  // else over's stands
+      c.into->voxels[v] = voxel;
     }
   }
 }
@@ -78,7 +87,7 @@ void OverlaidMap::combine(const std::vector<SparseTsdfMap::BlockIndex>& blocks) 
 bool OverlaidMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
   requireCurrent("sample");
   // An empty region: every block through the two maps' tables.
-  return SparseTsdfMap::RegionReader(combined_, Eigen::AlignedBox3f(), &over_).sample(p_W, out);
+  return SparseTsdfMap::RegionReader(combined_, Eigen::AlignedBox3f(), {&under_, &over_}).sample(p_W, out);
 }
 
 Eigen::AlignedBox3f OverlaidMap::holdableRegion() const {
@@ -87,7 +96,8 @@ Eigen::AlignedBox3f OverlaidMap::holdableRegion() const {
 
 std::unique_ptr<FieldSampler> OverlaidMap::sampler(const Eigen::AlignedBox3f& region_W) const {
   requireCurrent("sampler");
-  return std::make_unique<SparseTsdfMap::RegionReader>(combined_, region_W, &over_);
+  return std::make_unique<SparseTsdfMap::RegionReader>(combined_, region_W,
+                                                       std::vector<const SparseTsdfMap*>{&under_, &over_});
 }
 
 void OverlaidMap::clear() { readOnly("clear"); }

@@ -219,10 +219,12 @@ bool SparseTsdfMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
 }
 
 SparseTsdfMap::RegionReader::RegionReader(const SparseTsdfMap& map, const Eigen::AlignedBox3f& region_W,
-                                          const SparseTsdfMap* beneath)
-    : map_(map), beneath_(beneath) {
-  if (beneath && !beneath->config().sameGrid(map.config())) {
-    throw std::invalid_argument("RegionReader: the map beneath lies on another grid");
+                                          std::vector<const SparseTsdfMap*> beneath)
+    : map_(map), beneath_(std::move(beneath)) {
+  for (const SparseTsdfMap* under : beneath_) {
+    if (!under || !under->config().sameGrid(map.config())) {
+      throw std::invalid_argument("RegionReader: a map beneath is missing or lies on another grid");
+    }
   }
   // A cell at the box's far edge reads the next voxel too.
   const Eigen::AlignedBox3f cells_W(region_W.min(), region_W.max() + Eigen::Vector3f::Constant(map.voxelSize()));
@@ -235,8 +237,9 @@ SparseTsdfMap::RegionReader::RegionReader(const SparseTsdfMap& map, const Eigen:
     const BlockIndex at = index - first_;
     cells_[(at.z() * dims_.y() + at.y()) * dims_.x() + at.x()] = &block;
   };
-  if (beneath) beneath->forEachBlockIn(box, place);
-  map.forEachBlockIn(box, place);  // over those beneath
+  // The lowest first: each map's blocks over those beneath it.
+  for (auto under = beneath_.rbegin(); under != beneath_.rend(); ++under) (*under)->forEachBlockIn(box, place);
+  map.forEachBlockIn(box, place);
 }
 
 bool SparseTsdfMap::RegionReader::cellCorners(const Eigen::Vector3f& p_W, Voxel (&corners)[8],

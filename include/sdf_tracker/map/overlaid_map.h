@@ -16,9 +16,9 @@ namespace sdf_tracker {
 ///
 /// What the tracker reads while a new submap is young: the recent submaps (over) keep the ground
 /// they hold, the active submap (under) adds what only it has seen and what it sees again. The
-/// overlay keeps, for each block `under` holds, that block and `over`'s read as one, and is
-/// sampled as one sparse map (those blocks where it has them, `over`'s elsewhere): a sample costs
-/// what one map's does, and update() takes in what a frame fused into `under` changed. Both maps
+/// overlay keeps, for each block both maps hold, the two read as one, and is sampled as one sparse
+/// map (its blocks where it has them, else `under`'s, else `over`'s): a sample costs what one
+/// map's does, and update() takes in what a frame fused into `under` changed. Both maps
 /// must outlive it and stay unchanged while a sampler of the overlay is in use. Sampling after
 /// either changed and before update(), and the mutating calls of TsdfMap, throw std::logic_error.
 class OverlaidMap final : public TsdfMap {
@@ -40,12 +40,13 @@ class OverlaidMap final : public TsdfMap {
   void enableColour() override;
   size_t voxelCount() const override { return over_.voxelCount() + under_.voxelCount(); }
   bool observesNothing() const override { return over_.observesNothing() && under_.observesNothing(); }
-  /// Its own blocks (one for each of `under`'s): the two maps' are theirs.
+  /// Its own blocks (one for each block both maps hold): the two maps' are theirs.
   size_t memoryBytes() const override { return combined_.memoryBytes(); }
   std::unique_ptr<TsdfMap> clone() const override;
 
  private:
-  /// Makes combined_'s `blocks` (indices of blocks `under` holds) under's and over's read as one.
+  /// Makes combined_'s `blocks` (indices of blocks `under` holds) under's and over's read as one,
+  /// for those over holds too.
   void combine(const std::vector<SparseTsdfMap::BlockIndex>& blocks);
   /// Throws std::logic_error naming `call` when a map changed since the last update().
   void requireCurrent(const char* call) const;
@@ -53,7 +54,7 @@ class OverlaidMap final : public TsdfMap {
   const SparseTsdfMap& over_;
   const SparseTsdfMap& under_;
   float settled_weight_;
-  /// For each block `under` holds, it and `over`'s read as one (no colour: only sampled).
+  /// For each block both maps hold, the two read as one (no colour: only sampled).
   SparseTsdfMap combined_;
   /// over_'s revision that combined_ holds.
   uint64_t over_revision_;

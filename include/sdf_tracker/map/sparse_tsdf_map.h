@@ -272,13 +272,14 @@ class SparseTsdfMap : public TsdfMap {
 /// others go through the map's table. What a loop over a frame's points samples a sparse map
 /// through (SparseTsdfMap::sampler()); valid while the map is neither changed nor destroyed.
 ///
-/// Given a second map of the same grid `beneath`, it reads the two as one map whose blocks are
-/// `map`'s where `map` holds the block and `beneath`'s elsewhere (what OverlaidMap is read
-/// through); then `beneath` too must stay unchanged.
+/// Given maps of the same grid `beneath`, it reads them all as one map whose blocks are `map`'s
+/// where `map` holds the block, else the first of `beneath` that holds it (what OverlaidMap is
+/// read through); then those too must stay unchanged.
 class SparseTsdfMap::RegionReader final : public FieldSampler {
  public:
-  /// Throws std::invalid_argument when `beneath` is on another grid.
-  RegionReader(const SparseTsdfMap& map, const Eigen::AlignedBox3f& region_W, const SparseTsdfMap* beneath = nullptr);
+  /// Throws std::invalid_argument when a map beneath is on another grid.
+  RegionReader(const SparseTsdfMap& map, const Eigen::AlignedBox3f& region_W,
+               std::vector<const SparseTsdfMap*> beneath = {});
   /// As SparseTsdfMap::sample(), with the same result.
   bool sample(const Eigen::Vector3f& p_W, FieldSample* out) const override;
   /// As SparseTsdfMap::cellCorners(), with the same result.
@@ -299,14 +300,18 @@ class SparseTsdfMap::RegionReader final : public FieldSampler {
                z = static_cast<unsigned>(block.z() - first_.z());
     if (x >= static_cast<unsigned>(dims_.x()) || y >= static_cast<unsigned>(dims_.y()) ||
         z >= static_cast<unsigned>(dims_.z())) {
-      const VoxelBlock* found = map_.blocks_.find(keyOf(block));
-      return found || !beneath_ ? found : beneath_->blocks_.find(keyOf(block));
+      const uint64_t key = keyOf(block);
+      const VoxelBlock* found = map_.blocks_.find(key);
+      for (auto under = beneath_.begin(); !found && under != beneath_.end(); ++under) {
+        found = (*under)->blocks_.find(key);
+      }
+      return found;
     }
     return cells_[(z * dims_.y() + y) * dims_.x() + x];
   }
 
   const SparseTsdfMap& map_;
-  const SparseTsdfMap* beneath_;
+  std::vector<const SparseTsdfMap*> beneath_;
   BlockIndex first_ = BlockIndex::Zero();
   Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
   std::vector<const VoxelBlock*> cells_;
