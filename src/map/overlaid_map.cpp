@@ -30,7 +30,10 @@ OverlaidMap::OverlaidMap(const SparseTsdfMap& over, const SparseTsdfMap& under, 
   }
   combine(under.blockIndices());
   revision_read_ = under.revision();
+  tables_ = std::make_unique<SparseTsdfMap::RegionReader>(combined_, Eigen::AlignedBox3f(), layersBeneath());
 }
+
+std::vector<const SparseTsdfMap*> OverlaidMap::layersBeneath() const { return {&under_, &over_}; }
 
 void OverlaidMap::update() {
   if (over_.revision() == over_revision_ && under_.revision() == revision_read_) return;
@@ -86,8 +89,7 @@ void OverlaidMap::combine(const std::vector<SparseTsdfMap::BlockIndex>& blocks) 
 
 bool OverlaidMap::sample(const Eigen::Vector3f& p_W, FieldSample* out) const {
   requireCurrent("sample");
-  // An empty region: every block through the two maps' tables.
-  return SparseTsdfMap::RegionReader(combined_, Eigen::AlignedBox3f(), {&under_, &over_}).sample(p_W, out);
+  return tables_->sample(p_W, out);
 }
 
 Eigen::AlignedBox3f OverlaidMap::holdableRegion() const {
@@ -96,8 +98,7 @@ Eigen::AlignedBox3f OverlaidMap::holdableRegion() const {
 
 std::unique_ptr<FieldSampler> OverlaidMap::sampler(const Eigen::AlignedBox3f& region_W) const {
   requireCurrent("sampler");
-  return std::make_unique<SparseTsdfMap::RegionReader>(combined_, region_W,
-                                                       std::vector<const SparseTsdfMap*>{&under_, &over_});
+  return std::make_unique<SparseTsdfMap::RegionReader>(combined_, region_W, layersBeneath());
 }
 
 void OverlaidMap::clear() { readOnly("clear"); }

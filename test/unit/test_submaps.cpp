@@ -255,7 +255,7 @@ TEST(OverlaidMap, TakesInWhatTheMapUnderItChangedOnUpdate) {
   EXPECT_THROW(overlay.sample(at(0.4f), &s), std::logic_error) << "sampled before update()";
   EXPECT_THROW(overlay.sampler(region), std::logic_error) << "sampled before update()";
   overlay.update();
-  EXPECT_GT(overlay.memoryBytes(), 0u) << "a block of its own for each of under's";
+  EXPECT_GT(overlay.memoryBytes(), 0u) << "a block of its own for each block both maps hold";
   const SparseTsdfMap merged = mergeMaps({{&over}, {&under}});
   const std::unique_ptr<FieldSampler> sampler = overlay.sampler(region);
   for (float x = -0.1f; x < 0.6f; x += 0.0137f) {
@@ -288,17 +288,25 @@ TEST(OverlaidMap, TakesInWhatTheMapUnderItChangedOnUpdate) {
   EXPECT_EQ(after.distance_m, before.distance_m) << "a block not stamped as changed";
   EXPECT_EQ(after.weight, before.weight);
 
-  // A block under no longer holds (swapped out) is over's alone again.
-  under.remove(SparseTsdfMap::blockOf({20, 0, 0}));
+  // A block both maps held that under no longer holds (swapped out) is over's alone again; the
+  // overlay's own block of it goes.
+  under.remove(SparseTsdfMap::blockOf({12, 0, 0}));
   overlay.update();
-  EXPECT_FALSE(overlay.sample(at(0.4f), &s)) << "voxel 20's block is gone from under";
+  ASSERT_TRUE(overlay.sample(at(0.23f), &s));
+  EXPECT_NEAR(s.distance_m, 0.23f - 0.1f, 1e-6) << "voxel 11.5's block is over's alone";
+  ASSERT_TRUE(overlay.sample(at(0.4f), &s));
+  EXPECT_NEAR(s.distance_m, 0.4f - 0.13f, 1e-6) << "voxel 20's block is still under's";
+  // Fused again, then cleared: over's alone.
+  fusePlane(&under, 8, 24, 0.12f, 2.0f);
+  overlay.update();
   ASSERT_TRUE(overlay.sample(at(0.23f), &s));
   EXPECT_NEAR(s.distance_m, ((0.23f - 0.1f) * 6.0f + (0.23f - 0.12f) * 2.0f) / 8.0f, 1e-6)
-      << "voxel 11.5's block is still both maps'";
+      << "voxel 11.5's block is both maps' again";
   under.clear();
   overlay.update();
   ASSERT_TRUE(overlay.sample(at(0.23f), &s));
   EXPECT_NEAR(s.distance_m, 0.23f - 0.1f, 1e-6) << "under cleared: over alone";
+  EXPECT_FALSE(overlay.sample(at(0.4f), &s)) << "under cleared: nothing at voxel 20";
 
   // Where over's voxels are settled (weight 6 here), what under takes in changes nothing there.
   OverlaidMap settled(over, under, 6.0f);

@@ -50,6 +50,8 @@ class OverlaidMap final : public TsdfMap {
   void combine(const std::vector<SparseTsdfMap::BlockIndex>& blocks);
   /// Throws std::logic_error naming `call` when a map changed since the last update().
   void requireCurrent(const char* call) const;
+  /// What is read where combined_ holds no block, in order: under's block, else over's.
+  std::vector<const SparseTsdfMap*> layersBeneath() const;
 
   const SparseTsdfMap& over_;
   const SparseTsdfMap& under_;
@@ -60,6 +62,8 @@ class OverlaidMap final : public TsdfMap {
   uint64_t over_revision_;
   /// under_'s revision that combined_ holds.
   uint64_t revision_read_ = 0;
+  /// The three read as one through their tables (no region): what sample() reads.
+  std::unique_ptr<SparseTsdfMap::RegionReader> tables_;
 };
 
 }  // namespace sdf_tracker
