@@ -21,7 +21,7 @@ OverlaidMap::OverlaidMap(const SparseTsdfMap& over, const SparseTsdfMap& under, 
       under_(under),
       settled_weight_(settled_weight),
       combined_(under.config()),
-      over_revision_(over.revision()) {
+      over_revision_read_(over.revision()) {
   if (!over.config().sameGrid(under.config())) {
     throw std::invalid_argument("OverlaidMap: the two maps' lattices differ");
   }
@@ -29,33 +29,37 @@ OverlaidMap::OverlaidMap(const SparseTsdfMap& over, const SparseTsdfMap& under, 
     throw std::invalid_argument("OverlaidMap: settled_weight must be positive, not " + std::to_string(settled_weight));
   }
   combine(under.blockIndices());
-  revision_read_ = under.revision();
+  under_revision_read_ = under.revision();
   tables_ = std::make_unique<SparseTsdfMap::RegionReader>(combined_, Eigen::AlignedBox3f(), layersBeneath());
 }
 
 std::vector<const SparseTsdfMap*> OverlaidMap::layersBeneath() const { return {&under_, &over_}; }
 
+bool OverlaidMap::isCurrent() const {
+  return over_.revision() == over_revision_read_ && under_.revision() == under_revision_read_;
+}
+
 void OverlaidMap::update() {
-  if (over_.revision() == over_revision_ && under_.revision() == revision_read_) return;
-  if (over_.revision() != over_revision_ || under_.clearedAt() > revision_read_) {
+  if (isCurrent()) return;
+  if (over_.revision() != over_revision_read_ || under_.clearedAt() > under_revision_read_) {
     // Over's changes are not followed block by block: every block is combined again.
     combined_.clear();
     combine(under_.blockIndices());
   } else {
-    if (under_.removedAt() > revision_read_) {
+    if (under_.removedAt() > under_revision_read_) {
       // Blocks under no longer holds are not listed as changed: those are dropped here.
       for (const SparseTsdfMap::BlockIndex& index : combined_.blockIndices()) {
         if (!under_.find(index)) combined_.remove(index);
       }
     }
-    combine(under_.changedSince(revision_read_));
+    combine(under_.changedSince(under_revision_read_));
   }
-  revision_read_ = under_.revision();
-  over_revision_ = over_.revision();
+  under_revision_read_ = under_.revision();
+  over_revision_read_ = over_.revision();
 }
 
 void OverlaidMap::requireCurrent(const char* call) const {
-  if (over_.revision() != over_revision_ || under_.revision() != revision_read_) {
+  if (!isCurrent()) {
     throw std::logic_error(std::string("OverlaidMap::") + call +
                            ": a map it overlays changed since it last took them in (call update() first)");
   }

@@ -48,7 +48,9 @@ class OverlaidMap final : public TsdfMap {
   /// Makes combined_'s `blocks` (indices of blocks `under` holds) under's and over's read as one,
   /// for those over holds too.
   void combine(const std::vector<SparseTsdfMap::BlockIndex>& blocks);
-  /// Throws std::logic_error naming `call` when a map changed since the last update().
+  /// Neither map changed since combined_ took them in.
+  bool isCurrent() const;
+  /// Throws std::logic_error naming `call` unless isCurrent().
   void requireCurrent(const char* call) const;
   /// What is read where combined_ holds no block, in order: under's block, else over's.
   std::vector<const SparseTsdfMap*> layersBeneath() const;
@@ -58,10 +60,9 @@ class OverlaidMap final : public TsdfMap {
   float settled_weight_;
   /// For each block both maps hold, the two read as one (no colour: only sampled).
   SparseTsdfMap combined_;
-  /// over_'s revision that combined_ holds.
-  uint64_t over_revision_;
-  /// under_'s revision that combined_ holds.
-  uint64_t revision_read_ = 0;
+  /// The revisions of over_ and under_ that combined_ holds.
+  uint64_t over_revision_read_;
+  uint64_t under_revision_read_ = 0;
   /// The three read as one through their tables (no region): what sample() reads.
   std::unique_ptr<SparseTsdfMap::RegionReader> tables_;
 };
